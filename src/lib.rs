@@ -1,0 +1,13 @@
+//! scansurf: 3D scan data (point clouds, triangle meshes with holes and noise) to CAD surfaces,
+//! a sewn network of bicubic B-spline patches written as STEP and IGES.
+//!
+//! The pipeline (see `docs/` and the design notes): input file -> [`mesh::Mesh`] -> pre-passes
+//! (hole filling, smoothing, normals) -> an implicit surface f(x) = 0 -> outputs (meshes, quad
+//! nets, patch networks, STEP/IGES, reports).
+
+pub mod cli;
+pub mod error;
+pub mod mesh;
+
+pub use error::{Error, Result};
+pub use mesh::Mesh;
