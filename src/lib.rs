@@ -7,6 +7,7 @@
 
 pub mod cli;
 pub mod error;
+pub mod implicit;
 pub mod mesh;
 
 pub use error::{Error, Result};
