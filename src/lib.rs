@@ -8,6 +8,8 @@
 pub mod cli;
 pub mod error;
 pub mod implicit;
+pub mod inspect;
+pub mod io;
 pub mod mesh;
 
 pub use error::{Error, Result};

@@ -1,3 +1,48 @@
+//! The `scansurf` command line: clap subcommands that parse, call the library and print.
+//! No algorithms live here.
+
+mod inspect;
+pub mod progress;
+
+use clap::{Parser, Subcommand};
+
+/// scansurf: turn 3D scans (point clouds, meshes with holes) into CAD surfaces.
+#[derive(Debug, Parser)]
+#[command(name = "scansurf", version, about, long_about = None)]
+pub struct Cli {
+    /// No progress bars on stderr.
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Count points, faces, components, holes and defects of a mesh or point cloud.
+    #[command(
+        after_help = "Example:\n  scansurf inspect scan.ply\n  scansurf inspect bunny.obj --json > bunny.json"
+    )]
+    Inspect(inspect::Args),
+}
+
+/// Runs the command line; returns the process exit code.
 pub fn run() -> i32 {
-    0
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() { 2 } else { 0 };
+        }
+    };
+    let result = match cli.command {
+        Command::Inspect(a) => inspect::run(a, cli.quiet),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("scansurf: error: {e}");
+            1
+        }
+    }
 }

@@ -62,6 +62,35 @@ pub struct Topology {
     pub duplicate_vertices: usize,
 }
 
+/// Among the outgoing boundary edges `b -> c`, the one reached first when turning
+/// counter-clockwise (around the vertex normal at `b`) from the incoming direction `b -> a`: the
+/// walk has its faces on the left, so the hole it goes around lies counter-clockwise of `b -> a`.
+fn pick_turn(
+    mesh: &Mesh,
+    vnormals: &[nalgebra::Vector3<f64>],
+    a: u32,
+    b: u32,
+    cands: &[(u32, u32)],
+) -> Option<(u32, u32)> {
+    let pb = mesh.positions[b as usize];
+    let n = vnormals.get(b as usize).copied().unwrap_or_default();
+    let project = |v: nalgebra::Vector3<f64>| v - n * n.dot(&v);
+    let din = project(mesh.positions[a as usize] - pb);
+    let ccw = |c: u32| {
+        let d = project(mesh.positions[c as usize] - pb);
+        let ang = n.dot(&din.cross(&d)).atan2(din.dot(&d));
+        if ang <= 0.0 {
+            ang + std::f64::consts::TAU
+        } else {
+            ang
+        }
+    };
+    cands
+        .iter()
+        .copied()
+        .min_by(|x, y| ccw(x.0).total_cmp(&ccw(y.0)).then(x.0.cmp(&y.0)))
+}
+
 /// Union-find with path halving.
 pub(crate) struct DisjointSets {
     parent: Vec<u32>,
@@ -226,9 +255,9 @@ impl Topology {
             .collect();
     }
 
-    /// Chains the boundary edges into loops. At a vertex with several outgoing boundary edges,
-    /// the walk turns into the one reached by rotating through the incoming face's fan, so that
-    /// two holes touching at a vertex stay two loops.
+    /// Chains the boundary edges into loops, each walked with its faces on the left. At a vertex
+    /// with several outgoing boundary edges (holes touching at a vertex), the walk takes the
+    /// sharpest turn into the hole side, so that two holes touching at a vertex stay two loops.
     fn find_loops(&mut self, mesh: &Mesh) {
         // Directed boundary half-edges, as the single face walks them.
         let mut out: HashMap<u32, Vec<(u32, u32)>> = HashMap::new(); // from -> [(to, face)]
@@ -249,6 +278,12 @@ impl Topology {
             return;
         }
         let mut used: std::collections::HashSet<(u32, u32)> = std::collections::HashSet::new();
+        // Vertex normals are needed only where several boundary edges leave one vertex.
+        let vnormals = if out.values().any(|c| c.len() > 1) {
+            super::normals::vertex_normals(mesh)
+        } else {
+            Vec::new()
+        };
         let mut starts: Vec<(u32, u32)> = out
             .iter()
             .flat_map(|(&a, v)| v.iter().map(move |&(b, _)| (a, b)))
@@ -262,7 +297,11 @@ impl Topology {
             let mut verts = vec![a0];
             let (mut a, mut b) = (a0, b0);
             used.insert((a, b));
-            let mut face = out[&a].iter().find(|x| x.0 == b).map(|x| x.1).unwrap_or(0);
+            let mut face = out
+                .get(&a)
+                .and_then(|c| c.iter().find(|x| x.0 == b))
+                .map(|x| x.1)
+                .unwrap_or(0);
             let mut guard = 0usize;
             loop {
                 if b == a0 {
@@ -276,10 +315,12 @@ impl Topology {
                 let next = if cands.len() == 1 {
                     Some(cands[0])
                 } else {
-                    self.rotate_to_boundary(mesh, face, a, b)
-                        .and_then(|c| cands.iter().copied().find(|x| x.0 == c))
+                    let free: Vec<(u32, u32)> = cands
+                        .iter()
+                        .copied()
                         .filter(|x| !used.contains(&(b, x.0)))
-                        .or_else(|| cands.iter().copied().find(|x| !used.contains(&(b, x.0))))
+                        .collect();
+                    pick_turn(mesh, &vnormals, a, b, &free)
                 };
                 let Some((c, f)) = next else { break };
                 if used.contains(&(b, c)) {
@@ -354,32 +395,6 @@ impl Topology {
         });
     }
 
-    /// Rotates around vertex `b` starting from `face` (which walks `a -> b`) through faces
-    /// joined by two-face edges, until an edge `b -> c` used by one face only; returns `c`.
-    fn rotate_to_boundary(&self, mesh: &Mesh, mut face: u32, a: u32, b: u32) -> Option<u32> {
-        let mut prev = a;
-        for _ in 0..1024 {
-            let f = mesh.faces[face as usize];
-            // The third vertex of `face` besides `prev` and `b`.
-            let c = *f.iter().find(|&&x| x != prev && x != b)?;
-            let key = if b < c { (b, c) } else { (c, b) };
-            let e = &self.edges[*self.edge_index.get(&key)? as usize];
-            match e.faces.len() {
-                1 => return Some(c),
-                2 => {
-                    face = if e.faces[0].0 == face {
-                        e.faces[1].0
-                    } else {
-                        e.faces[0].0
-                    };
-                    prev = c;
-                }
-                _ => return None,
-            }
-        }
-        None
-    }
-
     /// Number of boundary edges.
     pub fn boundary_edge_count(&self) -> usize {
         self.edges.iter().filter(|e| e.faces.len() == 1).count()
@@ -391,5 +406,125 @@ impl Topology {
             && self.edges.iter().all(|e| e.faces.len() == 2)
             && self.non_manifold_vertices.is_empty()
             && self.misoriented_edges == 0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Point3;
+
+    fn grid(n: usize) -> Mesh {
+        // An n x n grid of unit squares in the z=0 plane, two triangles each.
+        let mut m = Mesh::default();
+        for j in 0..=n {
+            for i in 0..=n {
+                m.positions.push(Point3::new(i as f64, j as f64, 0.0));
+            }
+        }
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        for j in 0..n {
+            for i in 0..n {
+                m.faces.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                m.faces.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn sheet_has_one_border_and_holes_are_holes() {
+        let mut m = grid(6);
+        // Remove the two triangles of the square (2,2): a hole of 4 vertices.
+        let k = 2 * (2 * 6 + 2);
+        m.faces.drain(k..k + 2);
+        let t = Topology::build(&m);
+        assert_eq!(t.loops.len(), 2);
+        let border = t.loops.iter().find(|l| l.outer_border).unwrap();
+        assert_eq!(border.vertices.len(), 24);
+        let hole = t.loops.iter().find(|l| !l.outer_border).unwrap();
+        assert_eq!(hole.vertices.len(), 4);
+        assert!(t.non_manifold_edges.is_empty() && t.non_manifold_vertices.is_empty());
+        assert_eq!(t.misoriented_edges, 0);
+    }
+
+    #[test]
+    fn two_holes_touching_at_a_vertex_stay_two_loops() {
+        let mut m = grid(6);
+        // Remove squares (2,2) and (3,3): they share the vertex (3,3).
+        let a = 2 * (2 * 6 + 2);
+        let b = 2 * (3 * 6 + 3);
+        m.faces.drain(b..b + 2);
+        m.faces.drain(a..a + 2);
+        let t = Topology::build(&m);
+        let holes: Vec<_> = t.loops.iter().filter(|l| !l.outer_border).collect();
+        assert_eq!(holes.len(), 2, "{:?}", t.loops);
+        assert!(holes.iter().all(|l| l.vertices.len() == 4));
+        assert_eq!(t.non_manifold_vertices, vec![3 * 7 + 3]);
+    }
+
+    #[test]
+    fn non_manifold_edge_and_bowtie() {
+        let mut m = Mesh::default();
+        for p in [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ] {
+            m.positions.push(Point3::from(p));
+        }
+        m.faces = vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]];
+        let t = Topology::build(&m);
+        assert_eq!(t.non_manifold_edges.len(), 1);
+        // Bow-tie: two triangles sharing only vertex 0.
+        let mut b = Mesh::default();
+        for p in [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [-1.0, -1.0, 0.0],
+        ] {
+            b.positions.push(Point3::from(p));
+        }
+        b.faces = vec![[0, 1, 2], [0, 3, 4]];
+        let t = Topology::build(&b);
+        assert_eq!(t.non_manifold_vertices, vec![0]);
+        assert_eq!(t.components.len(), 1);
+        assert_eq!(t.loops.len(), 2);
+    }
+
+    #[test]
+    fn misoriented_and_degenerate_and_duplicates() {
+        let mut m = grid(1);
+        m.faces[1] = [m.faces[1][0], m.faces[1][2], m.faces[1][1]];
+        m.positions.push(Point3::new(0.0, 0.0, 0.0));
+        m.faces.push([0, 0, 1]);
+        let t = Topology::build(&m);
+        assert_eq!(t.misoriented_edges, 1);
+        assert_eq!(t.degenerate_faces, vec![2]);
+        assert_eq!(t.duplicate_vertices, 1);
+        assert_eq!(t.unreferenced_vertices, 1);
+    }
+
+    #[test]
+    fn closed_tetrahedron() {
+        let mut m = Mesh::default();
+        for p in [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ] {
+            m.positions.push(Point3::from(p));
+        }
+        m.faces = vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]];
+        let t = Topology::build(&m);
+        assert!(t.is_closed_manifold());
+        assert!(m.signed_volume() > 0.0);
+        let n = crate::mesh::normals::vertex_normals(&m);
+        assert!(n[3].z > 0.0);
     }
 }

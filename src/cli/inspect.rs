@@ -1,0 +1,26 @@
+//! `scansurf inspect FILE [--json]`.
+
+use crate::error::Result;
+use std::path::PathBuf;
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Mesh or point cloud (.ply .obj .stl .xyz .txt .pts .csv).
+    pub input: PathBuf,
+    /// Print the report as JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(a: Args, _quiet: bool) -> Result<()> {
+    let mesh = crate::io::read_mesh(&a.input)?;
+    let report = crate::inspect::inspect(&a.input.display().to_string(), &mesh);
+    if a.json {
+        let s = serde_json::to_string_pretty(&report)
+            .map_err(|e| crate::Error::Numerical(format!("cannot serialize report: {e}")))?;
+        println!("{s}");
+    } else {
+        print!("{}", report.to_text());
+    }
+    Ok(())
+}
