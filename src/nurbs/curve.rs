@@ -30,7 +30,9 @@ use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 use std::cmp::Ordering;
 
-/// A non-rational B-spline curve with a clamped knot vector.
+/// A non-rational B-spline curve with a clamped knot vector. Build values with
+/// [`new`](Self::new) or [`interpolate_with_end_tangents`](Self::interpolate_with_end_tangents),
+/// which check the invariants evaluation relies on (public fields are for writers and tests).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BSplineCurve {
     /// Polynomial degree p (1..=7).

@@ -13,6 +13,11 @@ use nalgebra::{Matrix2, Point3, Vector2, Vector3};
 
 /// A non-rational B-spline surface with clamped knot vectors. `ctrl[i][j]` is the control point
 /// with index i along u and j along v (`ctrl.len()` = n_u, every row n_v long).
+///
+/// The fields are public for the writers and for tests; build values with [`new`](Self::new)
+/// or [`interpolate_grid`](Self::interpolate_grid), which check the invariants that
+/// evaluation relies on (a hand-built value with inconsistent knots can panic when evaluated;
+/// [`PatchNetwork::validate`](super::PatchNetwork::validate) rejects it before export).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BSplineSurface {
     pub degree_u: usize,
@@ -270,8 +275,8 @@ impl BSplineSurface {
     ///    points R_{i,j}.
     /// 2. The v-tangents along v = 0 and v = 1 are interpolated along u the same way (they are
     ///    vectors; the problem is linear), with the corner twists as end derivatives, giving
-    ///    S+3 control vectors V0_i and V1_i (Piegl & Tiller §9.2.5's treatment of eq. 12-14's
-    ///    end conditions for a tensor product).
+    ///    S+3 control vectors V0_i and V1_i: the end conditions of eq. 12-14 for every control
+    ///    column, not only at the data columns.
     /// 3. v-pass (eq. 12-14): every column i = 0..=S+2 is interpolated along v through
     ///    R_{i, 0..=T} with end tangents V0_i, V1_i.
     ///
