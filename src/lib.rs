@@ -7,10 +7,12 @@
 
 pub mod cli;
 pub mod error;
+pub mod export;
 pub mod implicit;
 pub mod inspect;
 pub mod io;
 pub mod mesh;
+pub mod nurbs;
 
 pub use error::{Error, Result};
 pub use mesh::Mesh;
