@@ -10,12 +10,14 @@
 //! The checks need a Python with OpenCASCADE (`.venv-check` in the repository, or
 //! /work/main/.venv-check); without one the tests print why and return.
 
+mod common;
+use common::{cad_check, checker};
+
 use nalgebra::{Matrix3, Point3, Vector3};
 use scansurf::export::{iges_string, step_string, ExportOptions, Timestamp};
 use scansurf::nurbs::{BSplineSurface, Params, PatchGrid, PatchInput, PatchNetwork, Side, Twist};
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 const R: f64 = 10.0;
 
@@ -228,54 +230,6 @@ fn sphere_points(count: usize) -> Vec<Point3<f64>> {
 }
 
 /// The Python with OpenCASCADE and the checker script, if present.
-fn checker() -> Option<(PathBuf, PathBuf)> {
-    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let python = [
-        repo.join(".venv-check/bin/python"),
-        PathBuf::from("/work/main/.venv-check/bin/python"),
-    ]
-    .into_iter()
-    .find(|p| p.exists())?;
-    let script = [
-        repo.join("../shared/tools/cad_check.py"),
-        repo.join("../../shared/tools/cad_check.py"),
-        PathBuf::from("/work/shared/tools/cad_check.py"),
-    ]
-    .into_iter()
-    .find(|p| p.exists())?;
-    Some((python, script))
-}
-
-fn cad_check(
-    python: &Path,
-    script: &Path,
-    model: &Path,
-    points: Option<&Path>,
-) -> serde_json::Value {
-    let mut cmd = Command::new(python);
-    cmd.arg(script).arg(model);
-    if let Some(p) = points {
-        cmd.arg("--points").arg(p);
-    }
-    let out = cmd.output().expect("running cad_check.py");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let line = stdout
-        .lines()
-        .rev()
-        .find(|l| l.trim_start().starts_with('{'))
-        .unwrap_or_else(|| {
-            panic!(
-                "cad_check printed no JSON for {}: {}\n{}",
-                model.display(),
-                stdout,
-                String::from_utf8_lossy(&out.stderr)
-            )
-        });
-    let v: serde_json::Value = serde_json::from_str(line).expect("cad_check JSON");
-    println!("cad_check {}: {v}", model.display());
-    v
-}
-
 fn write_xyz(path: &Path, pts: &[Point3<f64>]) {
     let text: String = pts
         .iter()

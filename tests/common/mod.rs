@@ -1,0 +1,55 @@
+//! Test support shared by the integration tests: the independent CAD checker
+//! (`../shared/tools/cad_check.py`, OpenCASCADE) run from the repo's `.venv-check`.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The checker's python and script; `None` outside CI when they are missing (the test then
+/// prints SKIPPED), a panic in CI (CI=true), where `scripts/test.sh` must have created them.
+pub fn checker() -> Option<(PathBuf, PathBuf)> {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let python = [repo.join(".venv-check/bin/python")]
+        .into_iter()
+        .find(|p| p.exists());
+    let script = [repo.join("../shared/tools/cad_check.py")]
+        .into_iter()
+        .find(|p| p.exists());
+    match (python, script) {
+        (Some(p), Some(s)) => Some((p, s)),
+        _ if std::env::var_os("CI").is_some() => {
+            panic!("CI: the CAD checker is missing (.venv-check or ../shared/tools/cad_check.py); run bash scripts/test.sh")
+        }
+        _ => None,
+    }
+}
+
+pub fn cad_check(
+    python: &Path,
+    script: &Path,
+    model: &Path,
+    points: Option<&Path>,
+) -> serde_json::Value {
+    let mut cmd = Command::new(python);
+    cmd.arg(script).arg(model);
+    if let Some(p) = points {
+        cmd.arg("--points").arg(p);
+    }
+    let out = cmd.output().expect("running cad_check.py");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout
+        .lines()
+        .rev()
+        .find(|l| l.trim_start().starts_with('{'))
+        .unwrap_or_else(|| {
+            panic!(
+                "cad_check printed no JSON for {}: {}\n{}",
+                model.display(),
+                stdout,
+                String::from_utf8_lossy(&out.stderr)
+            )
+        });
+    let v: serde_json::Value = serde_json::from_str(line).expect("cad_check JSON");
+    println!("cad_check {}: {v}", model.display());
+    v
+}
