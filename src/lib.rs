@@ -13,6 +13,7 @@ pub mod inspect;
 pub mod io;
 pub mod mesh;
 pub mod nurbs;
+pub mod quality;
 
 pub use error::{Error, Result};
 pub use mesh::Mesh;
