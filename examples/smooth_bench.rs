@@ -1,0 +1,442 @@
+//! Benchmarks for the smoothing passes (docs/BENCHMARKS.md, "## smooth").
+//!
+//! ```text
+//! # noisy fandisk: smooth NOISY.ply (written by shared/tools/peer_smooth.py), write OUT.ply and
+//! # print our own error figures against the clean mesh
+//! cargo run --release --example smooth_bench -- fandisk CLEAN.obj NOISY.ply OUT.ply \
+//!     [--method anisotropic|arc|centroid] [--iterations N] [--step S] [--lambda L] [--r R]
+//! # speed: 10 iterations on a generated noisy torus of about N vertices
+//! cargo run --release --example smooth_bench -- speed 2000000 [--method M]
+//! ```
+//!
+//! The PLY/OBJ reading and PLY writing here is a stand-in until the crate's readers land in
+//! src/io: just enough for the files the benchmark script writes (ASCII or binary little-endian
+//! PLY with x, y, z vertex properties and a face index list) and for the simple `v`/`f` OBJ files.
+
+use nalgebra::{Point3, Vector3};
+use scansurf::mesh::Mesh;
+use scansurf::smooth::{self, Adjacency, Control};
+use std::io::Write;
+use std::time::Instant;
+
+type Res<T> = std::result::Result<T, Box<dyn std::error::Error>>;
+
+fn read_obj(path: &str) -> Res<Mesh> {
+    let text = std::fs::read_to_string(path)?;
+    let mut m = Mesh::default();
+    for line in text.lines() {
+        let mut it = line.split_whitespace();
+        match it.next() {
+            Some("v") => {
+                let c: Vec<f64> = it.take(3).map(|x| x.parse()).collect::<Result<_, _>>()?;
+                m.positions.push(Point3::new(c[0], c[1], c[2]));
+            }
+            Some("f") => {
+                let idx: Vec<u32> = it
+                    .map(|x| {
+                        x.split('/')
+                            .next()
+                            .unwrap_or("")
+                            .parse::<u32>()
+                            .map(|i| i - 1)
+                    })
+                    .collect::<Result<_, _>>()?;
+                for k in 1..idx.len().saturating_sub(1) {
+                    m.faces.push([idx[0], idx[k], idx[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(m)
+}
+
+fn scalar_size(t: &str) -> Res<usize> {
+    Ok(match t {
+        "char" | "uchar" | "int8" | "uint8" => 1,
+        "short" | "ushort" | "int16" | "uint16" => 2,
+        "int" | "uint" | "float" | "int32" | "uint32" | "float32" => 4,
+        "double" | "float64" => 8,
+        _ => return Err(format!("PLY type {t}").into()),
+    })
+}
+
+fn read_scalar(b: &[u8], t: &str) -> f64 {
+    match t {
+        "char" | "int8" => b[0] as i8 as f64,
+        "uchar" | "uint8" => b[0] as f64,
+        "short" | "int16" => i16::from_le_bytes([b[0], b[1]]) as f64,
+        "ushort" | "uint16" => u16::from_le_bytes([b[0], b[1]]) as f64,
+        "int" | "int32" => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        "uint" | "uint32" => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        "float" | "float32" => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        _ => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
+    }
+}
+
+/// A PLY property: name, scalar type, and the count type for a list.
+type PlyProperty = (String, String, Option<String>);
+
+/// Minimal PLY reader: vertex x y z (any scalar properties), face list; ASCII or binary LE.
+fn read_ply(path: &str) -> Res<Mesh> {
+    let data = std::fs::read(path)?;
+    let end = data
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .ok_or("no end_header")?
+        + 11;
+    let header = std::str::from_utf8(&data[..end])?;
+    let mut ascii = false;
+    // (element name, count, properties (name, type, list count type))
+    let mut elements: Vec<(String, usize, Vec<PlyProperty>)> = Vec::new();
+    for line in header.lines() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        match w.as_slice() {
+            ["format", f, ..] => ascii = *f == "ascii",
+            ["element", n, c] => elements.push((n.to_string(), c.parse()?, Vec::new())),
+            ["property", "list", ct, t, n] => elements
+                .last_mut()
+                .ok_or("property before element")?
+                .2
+                .push((n.to_string(), t.to_string(), Some(ct.to_string()))),
+            ["property", t, n] => elements
+                .last_mut()
+                .ok_or("property before element")?
+                .2
+                .push((n.to_string(), t.to_string(), None)),
+            _ => {}
+        }
+    }
+    let mut m = Mesh::default();
+    let mut pos = end;
+    let text = if ascii {
+        std::str::from_utf8(&data[end..])?.to_string()
+    } else {
+        String::new()
+    };
+    let mut tokens = text.split_whitespace();
+    for (name, count, props) in &elements {
+        for _ in 0..*count {
+            let mut vals: Vec<(String, Vec<f64>)> = Vec::new();
+            for (pn, t, lt) in props {
+                let mut v = Vec::new();
+                if ascii {
+                    let n = match lt {
+                        Some(_) => tokens.next().ok_or("eof")?.parse::<f64>()? as usize,
+                        None => 1,
+                    };
+                    for _ in 0..n {
+                        v.push(tokens.next().ok_or("eof")?.parse::<f64>()?);
+                    }
+                } else {
+                    let n = match lt {
+                        Some(ct) => {
+                            let s = scalar_size(ct)?;
+                            let n = read_scalar(&data[pos..pos + s], ct) as usize;
+                            pos += s;
+                            n
+                        }
+                        None => 1,
+                    };
+                    let s = scalar_size(t)?;
+                    for _ in 0..n {
+                        v.push(read_scalar(&data[pos..pos + s], t));
+                        pos += s;
+                    }
+                }
+                vals.push((pn.clone(), v));
+            }
+            let get = |k: &str| vals.iter().find(|x| x.0 == k).map(|x| x.1.clone());
+            if name == "vertex" {
+                let (x, y, z) = (get("x"), get("y"), get("z"));
+                m.positions.push(Point3::new(
+                    x.ok_or("x")?[0],
+                    y.ok_or("y")?[0],
+                    z.ok_or("z")?[0],
+                ));
+            } else if name == "face" {
+                let idx = get("vertex_indices")
+                    .or_else(|| get("vertex_index"))
+                    .ok_or("face list")?;
+                for k in 1..idx.len().saturating_sub(1) {
+                    m.faces
+                        .push([idx[0] as u32, idx[k] as u32, idx[k + 1] as u32]);
+                }
+            }
+        }
+    }
+    Ok(m)
+}
+
+fn write_ply(path: &str, m: &Mesh) -> Res<()> {
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    write!(
+        w,
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        m.positions.len(),
+        m.faces.len()
+    )?;
+    for p in &m.positions {
+        for c in p.iter() {
+            w.write_all(&c.to_le_bytes())?;
+        }
+    }
+    for f in &m.faces {
+        w.write_all(&[3u8])?;
+        for &v in f {
+            w.write_all(&(v as i32).to_le_bytes())?;
+        }
+    }
+    Ok(())
+}
+
+fn face_normals(m: &Mesh) -> Vec<Vector3<f64>> {
+    (0..m.faces.len())
+        .map(|f| {
+            m.face_cross(f)
+                .try_normalize(0.0)
+                .unwrap_or_else(Vector3::zeros)
+        })
+        .collect()
+}
+
+/// Angle in degrees between the normals of the two faces of each interior edge.
+fn edge_angles(m: &Mesh, adj: &Adjacency) -> Vec<Option<f64>> {
+    let n = face_normals(m);
+    (0..adj.edges.len())
+        .map(|e| {
+            let fs = adj.faces_of_edge(e);
+            (fs.len() == 2).then(|| {
+                n[fs[0] as usize]
+                    .dot(&n[fs[1] as usize])
+                    .clamp(-1.0, 1.0)
+                    .acos()
+                    .to_degrees()
+            })
+        })
+        .collect()
+}
+
+/// Error figures of `ours` against `clean` (same connectivity), the script's three plus the
+/// feature-edge angle change.
+fn report(clean: &Mesh, ours: &Mesh, adj: &Adjacency, feature_deg: f64) {
+    let el = adj
+        .edges
+        .iter()
+        .map(|e| (clean.positions[e[0] as usize] - clean.positions[e[1] as usize]).norm())
+        .sum::<f64>()
+        / adj.edges.len() as f64;
+    let d = clean
+        .positions
+        .iter()
+        .zip(&ours.positions)
+        .map(|(a, b)| (a - b).norm())
+        .sum::<f64>()
+        / clean.positions.len() as f64
+        / el;
+    let (nc, no) = (face_normals(clean), face_normals(ours));
+    let mut ang: Vec<f64> = nc
+        .iter()
+        .zip(&no)
+        .map(|(a, b)| a.dot(b).clamp(-1.0, 1.0).acos().to_degrees())
+        .collect();
+    let mean = ang.iter().sum::<f64>() / ang.len() as f64;
+    ang.sort_by(f64::total_cmp);
+    // numpy's default (linear) percentile.
+    let rank = 0.95 * (ang.len() - 1) as f64;
+    let (lo, hi) = (rank.floor() as usize, rank.ceil() as usize);
+    let p95 = ang[lo] + (ang[hi] - ang[lo]) * (rank - lo as f64);
+    let (ac, ao) = (edge_angles(clean, adj), edge_angles(ours, adj));
+    let (mut n, mut abs, mut signed) = (0usize, 0.0, 0.0);
+    for (c, o) in ac.iter().zip(&ao) {
+        if let (Some(c), Some(o)) = (c, o) {
+            if *c > feature_deg {
+                n += 1;
+                abs += (o - c).abs();
+                signed += o - c;
+            }
+        }
+    }
+    println!(
+        "dist/el {d:.3}  normal err mean {mean:.2} deg p95 {p95:.2}  feature edges (> {feature_deg} deg): {n}, angle change mean |.| {:.2} deg, signed {:.2} deg",
+        abs / n.max(1) as f64,
+        signed / n.max(1) as f64
+    );
+}
+
+struct Opts {
+    method: String,
+    iterations: Option<usize>,
+    step: Option<f64>,
+    lambda: Option<f64>,
+    r: Option<f64>,
+    passes: Option<usize>,
+    sigma: Option<f64>,
+}
+
+fn parse_opts(args: &[String]) -> Res<Opts> {
+    let mut o = Opts {
+        method: "anisotropic".into(),
+        iterations: None,
+        step: None,
+        lambda: None,
+        r: None,
+        passes: None,
+        sigma: None,
+    };
+    let mut i = 0;
+    while i < args.len() {
+        let v = args.get(i + 1).ok_or("missing value")?;
+        match args[i].as_str() {
+            "--method" => o.method = v.clone(),
+            "--iterations" => o.iterations = Some(v.parse()?),
+            "--step" => o.step = Some(v.parse()?),
+            "--lambda" => o.lambda = Some(v.parse()?),
+            "--r" => o.r = Some(v.parse()?),
+            "--passes" => o.passes = Some(v.parse()?),
+            "--sigma" => o.sigma = Some(v.parse()?),
+            a => return Err(format!("unknown option {a}").into()),
+        }
+        i += 2;
+    }
+    Ok(o)
+}
+
+/// Runs the chosen method; `--step` and `--lambda` for anisotropic are in mean edge lengths
+/// (squared for the step).
+fn run(m: &mut Mesh, adj: &Adjacency, o: &Opts) -> Res<smooth::SmoothReport> {
+    let ctl = Control::default();
+    let l = m.mean_edge_length();
+    Ok(match o.method.as_str() {
+        "anisotropic" => {
+            let mut p = smooth::AnisotropicParams::default();
+            if let Some(n) = o.iterations {
+                p.iterations = n;
+            }
+            p.step = o.step.map(|s| s * l * l);
+            p.lambda = o.lambda.map(|x| x * l);
+            if let Some(r) = o.r {
+                p.r = r;
+            }
+            if let Some(x) = o.passes {
+                p.guide_passes = x;
+            }
+            if let Some(x) = o.sigma {
+                p.guide_sigma = x;
+            }
+            smooth::anisotropic(m, adj, &p, &ctl)?
+        }
+        "arc" => {
+            let mut p = smooth::ArcParams::default();
+            if let Some(n) = o.iterations {
+                p.iterations = n;
+            }
+            if let Some(s) = o.step {
+                p.step = s;
+            }
+            smooth::arc(m, adj, &p, &ctl)?
+        }
+        "centroid" => {
+            let mut p = smooth::CentroidParams::default();
+            if let Some(n) = o.iterations {
+                p.iterations = n;
+            }
+            if let Some(s) = o.step {
+                p.step = s;
+            }
+            smooth::centroid(m, adj, &p, None, &ctl)?
+        }
+        x => return Err(format!("unknown method {x}").into()),
+    })
+}
+
+/// A noisy torus of about `n` vertices (grid of u x v, v = 2u).
+fn torus(n: usize) -> Mesh {
+    let nu = ((n as f64 / 2.0).sqrt().round() as usize).max(3);
+    let nv = 2 * nu;
+    let (rr, r) = (3.0, 1.0);
+    let mut m = Mesh::default();
+    let mut seed = 12345u64;
+    let mut rnd = || {
+        // xorshift64*, uniform in [-0.5, 0.5)
+        seed ^= seed >> 12;
+        seed ^= seed << 25;
+        seed ^= seed >> 27;
+        (seed.wrapping_mul(0x2545F4914F6CDD1D) >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let h = 2.0 * std::f64::consts::PI * r / nu as f64;
+    for j in 0..nv {
+        let b = 2.0 * std::f64::consts::PI * j as f64 / nv as f64;
+        for i in 0..nu {
+            let a = 2.0 * std::f64::consts::PI * i as f64 / nu as f64;
+            let rad = r + 0.3 * h * rnd();
+            m.positions.push(Point3::new(
+                (rr + rad * a.cos()) * b.cos(),
+                (rr + rad * a.cos()) * b.sin(),
+                rad * a.sin(),
+            ));
+        }
+    }
+    let id = |i: usize, j: usize| ((j % nv) * nu + (i % nu)) as u32;
+    for j in 0..nv {
+        for i in 0..nu {
+            m.faces.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            m.faces.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    m
+}
+
+fn main() -> Res<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match args.first().map(String::as_str) {
+        Some("fandisk") if args.len() >= 4 => {
+            let clean = if args[1].ends_with(".ply") {
+                read_ply(&args[1])?
+            } else {
+                read_obj(&args[1])?
+            };
+            let mut m = read_ply(&args[2])?;
+            if m.faces != clean.faces {
+                return Err("noisy mesh's faces differ from the clean mesh's".into());
+            }
+            let o = parse_opts(&args[4..])?;
+            let adj = Adjacency::build(&m)?;
+            print!("noisy  ");
+            report(&clean, &m, &adj, 30.0);
+            let rep = run(&mut m, &adj, &o)?;
+            print!("ours   ");
+            report(&clean, &m, &adj, 30.0);
+            println!("{}", serde_json::to_string(&rep)?);
+            write_ply(&args[3], &m)?;
+        }
+        Some("speed") if args.len() >= 2 => {
+            let n: usize = args[1].parse()?;
+            let mut o = parse_opts(&args[2..])?;
+            o.iterations = o.iterations.or(Some(10));
+            let mut m = torus(n);
+            println!(
+                "torus: {} vertices, {} faces, {} threads",
+                m.positions.len(),
+                m.faces.len(),
+                rayon::current_num_threads()
+            );
+            let t = Instant::now();
+            let adj = Adjacency::build(&m)?;
+            let ta = t.elapsed().as_secs_f64();
+            let rep = run(&mut m, &adj, &o)?;
+            println!(
+                "adjacency {ta:.2} s, {} x{} {:.2} s, total {:.2} s",
+                rep.method,
+                rep.iterations,
+                rep.seconds,
+                t.elapsed().as_secs_f64()
+            );
+        }
+        _ => {
+            eprintln!("usage: smooth_bench fandisk CLEAN.obj NOISY.ply OUT.ply [options] | speed N [options]");
+            std::process::exit(2);
+        }
+    }
+    Ok(())
+}

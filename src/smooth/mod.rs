@@ -1,0 +1,26 @@
+//! Mesh smoothing passes, run on a triangle mesh in place:
+//! - [`anisotropic`]: feature-preserving anisotropic mean-curvature flow (seed 000 eq. 14-20,
+//!   after Hildebrandt & Polthier 2004): removes scanner noise, keeps sharp edges and corners.
+//! - [`arc`]: circular-arc smoothing (seed 002 section 3.5, after Karbacher & Hausler): moves each
+//!   vertex along its normal until it lies on circular arcs through its neighbours.
+//! - [`centroid`]: area-weighted centroid relaxation (seed 003 eq. 9, seed 000 eq. 13): improves
+//!   triangle shapes, tangentially or with re-projection onto an implicit surface.
+//!
+//! All three share [`Control`] (region mask, progress callback) and return a [`SmoothReport`].
+//! Every pass gathers per vertex (each new position is computed from the old mesh by one thread),
+//! so the result does not depend on the number of threads; sums across the mesh are taken in a
+//! fixed order. Memory is linear in the mesh.
+
+pub mod anisotropic;
+pub mod arc;
+pub mod centroid;
+mod common;
+mod normal_filter;
+#[cfg(test)]
+pub(crate) mod testing;
+
+pub use crate::mesh::adjacency::{vertices_of_faces, Adjacency};
+pub use anisotropic::{anisotropic, AnisotropicParams};
+pub use arc::{arc, ArcParams};
+pub use centroid::{centroid, CentroidParams};
+pub use common::{Control, SmoothReport};
