@@ -15,7 +15,8 @@
 //! recomputed each time. On a sphere the rule is exact (delta = 0), so the pass does not shrink.
 //!
 //! All vertices move at once (Jacobi), so a full step would leave the highest-frequency noise
-//! oscillating; the default moves half of Delta_n per iteration. Boundary and non-manifold
+//! oscillating; the default moves half of Delta_n per iteration, and each delta_i is clamped to
+//! [-d_i, d_i]. Boundary and non-manifold
 //! vertices stay put by default. Neighbours whose normal is turned by more than
 //! [`ArcParams::max_normal_angle_deg`] (a crease) do not vote.
 
@@ -37,7 +38,7 @@ pub struct ArcParams {
     pub iterations: usize,
     /// Fraction of Delta_n applied per iteration, in (0, 1] (default 0.5).
     pub step: f64,
-    /// Neighbours whose normal differs by more than this many degrees are ignored (default 120).
+    /// Neighbours whose normal differs by more than this many degrees are ignored (default 90).
     pub max_normal_angle_deg: f64,
     /// Keep boundary and non-manifold vertices fixed (default true).
     pub fix_boundary: bool,
@@ -48,7 +49,7 @@ impl Default for ArcParams {
         ArcParams {
             iterations: 10,
             step: 0.5,
-            max_normal_angle_deg: 120.0,
+            max_normal_angle_deg: 90.0,
             fix_boundary: true,
         }
     }
@@ -87,7 +88,9 @@ fn arc_error(
     if 1.0 + c < 1e-6 {
         return None;
     }
-    Some((cn + ct * s / (1.0 + c), d))
+    // Clamped to the neighbour's distance: a larger move means the arc model does not hold
+    // (normals too far apart for the spacing), and the clamp keeps the pass stable there.
+    Some(((cn + ct * s / (1.0 + c)).clamp(-d, d), d))
 }
 
 /// Smooths `mesh` in place by circular-arc smoothing (seed 002 section 3.5, eq. 3).
@@ -171,4 +174,109 @@ pub fn arc(
         seconds: start.elapsed().as_secs_f64(),
         parameters: serde_json::to_value(params).unwrap_or(serde_json::Value::Null),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::smooth::testing::*;
+
+    fn run(m: &mut Mesh, p: &ArcParams) -> SmoothReport {
+        let adj = Adjacency::build(m).unwrap();
+        arc(m, &adj, p, &Control::default()).unwrap()
+    }
+
+    #[test]
+    fn arc_rule_is_exact_on_a_circle() {
+        // Two points on the unit circle 30 degrees apart with their radial normals: delta = 0.
+        let (a, b) = (0.0f64, 30f64.to_radians());
+        let p = Point3::new(a.cos(), a.sin(), 0.0);
+        let q = Point3::new(b.cos(), b.sin(), 0.0);
+        let (np, nq) = (p.coords, q.coords);
+        let (delta, d) = arc_error(&p, &np, &q, &nq, -1.0).unwrap();
+        assert!(delta.abs() < 1e-12 && (d - 2.0 * 15f64.to_radians().sin()).abs() < 1e-12);
+        // Moved outwards by 0.01 along its normal, p is told to come back by 0.01 (to first order).
+        let p2 = p + np * 0.01;
+        let (delta, _) = arc_error(&p2, &np, &q, &nq, -1.0).unwrap();
+        assert!((delta + 0.01).abs() < 1e-3, "{delta}");
+    }
+
+    #[test]
+    fn noisy_plane_becomes_flat() {
+        let n = 30;
+        let mut m = plane(n);
+        let h = 1.0 / n as f64;
+        let mut g = Noise::new(4);
+        for p in m.positions.iter_mut() {
+            if p.x > 0.0 && p.x < 1.0 && p.y > 0.0 && p.y < 1.0 {
+                p.z = 0.3 * h * g.gauss();
+            }
+        }
+        let before = mean_normal_error(&m, &Vector3::z());
+        run(&mut m, &ArcParams::default());
+        let after = mean_normal_error(&m, &Vector3::z());
+        assert!(
+            after < 0.3 * before && after < 6.0,
+            "normal error {before} -> {after} deg"
+        );
+        let mut m2 = m.clone();
+        run(
+            &mut m2,
+            &ArcParams {
+                iterations: 100,
+                ..Default::default()
+            },
+        );
+        let longer = mean_normal_error(&m2, &Vector3::z());
+        assert!(longer < 1.5, "after 110 iterations {longer} deg");
+    }
+
+    #[test]
+    fn noisy_sphere_keeps_its_volume_and_roundness() {
+        let clean = sphere(4);
+        let v0 = clean.signed_volume();
+        let mut m = clean.clone();
+        let h = m.mean_edge_length();
+        add_normal_noise(&mut m, 0.3 * h, 11);
+        let radial = |m: &Mesh| {
+            let r: Vec<f64> = m.positions.iter().map(|p| p.coords.norm()).collect();
+            let mean = r.iter().sum::<f64>() / r.len() as f64;
+            (r.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / r.len() as f64).sqrt()
+        };
+        let spread0 = radial(&m);
+        run(
+            &mut m,
+            &ArcParams {
+                iterations: 20,
+                ..Default::default()
+            },
+        );
+        let v = m.signed_volume();
+        assert!(((v - v0) / v0).abs() < 0.01, "volume {v0} -> {v}");
+        assert!(
+            radial(&m) < 0.3 * spread0,
+            "radius spread {spread0} -> {}",
+            radial(&m)
+        );
+    }
+
+    #[test]
+    fn degenerate_input_gives_finite_positions() {
+        let mut m = degenerate();
+        for fix_boundary in [true, false] {
+            let p = ArcParams {
+                fix_boundary,
+                ..Default::default()
+            };
+            run(&mut m, &p);
+            assert!(all_finite(&m), "{:?}", m.positions);
+        }
+        let mut m = plane(2);
+        let adj = Adjacency::build(&m).unwrap();
+        let p = ArcParams {
+            step: 0.0,
+            ..Default::default()
+        };
+        assert!(arc(&mut m, &adj, &p, &Control::default()).is_err());
+    }
 }

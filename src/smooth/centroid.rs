@@ -170,3 +170,111 @@ pub fn centroid(
         }),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::smooth::testing::*;
+
+    struct UnitSphere;
+    impl Implicit for UnitSphere {
+        fn value(&self, x: &Point3<f64>) -> f64 {
+            x.coords.norm() - 1.0
+        }
+    }
+
+    /// Smallest angle of any triangle, in degrees.
+    fn min_angle(m: &Mesh) -> f64 {
+        let mut best = 180.0f64;
+        for f in &m.faces {
+            for k in 0..3 {
+                let a = m.positions[f[k] as usize];
+                let b = m.positions[f[(k + 1) % 3] as usize];
+                let c = m.positions[f[(k + 2) % 3] as usize];
+                best = best.min((b - a).angle(&(c - a)).to_degrees());
+            }
+        }
+        best
+    }
+
+    /// A unit sphere whose vertices were pushed around tangentially (bad triangles, same shape).
+    fn jittered_sphere() -> Mesh {
+        let mut m = sphere(3);
+        let mut g = Noise::new(2);
+        let h = m.mean_edge_length();
+        for p in m.positions.iter_mut() {
+            let n = p.coords;
+            let t = Vector3::new(g.gauss(), g.gauss(), g.gauss()) * (0.25 * h);
+            *p = Point3::from((n + (t - n * t.dot(&n))).normalize());
+        }
+        m
+    }
+
+    #[test]
+    fn relaxation_on_an_implicit_improves_triangles_and_stays_on_it() {
+        let mut m = jittered_sphere();
+        let before = min_angle(&m);
+        let adj = Adjacency::build(&m).unwrap();
+        let rep = centroid(
+            &mut m,
+            &adj,
+            &CentroidParams::default(),
+            Some(&UnitSphere),
+            &Control::default(),
+        )
+        .unwrap();
+        let after = min_angle(&m);
+        assert!(after > before + 5.0, "min angle {before} -> {after}");
+        let off = m
+            .positions
+            .iter()
+            .map(|p| (p.coords.norm() - 1.0).abs())
+            .fold(0.0, f64::max);
+        assert!(off < 1e-9, "off the sphere by {off}");
+        assert!(rep.mean_displacement > 0.0);
+    }
+
+    #[test]
+    fn tangential_relaxation_keeps_the_shape() {
+        let mut m = jittered_sphere();
+        let v0 = m.signed_volume();
+        let before = min_angle(&m);
+        let adj = Adjacency::build(&m).unwrap();
+        let p = CentroidParams {
+            iterations: 20,
+            ..Default::default()
+        };
+        centroid(&mut m, &adj, &p, None, &Control::default()).unwrap();
+        assert!(min_angle(&m) > before + 5.0);
+        let v = m.signed_volume();
+        assert!(((v - v0) / v0).abs() < 0.01, "volume {v0} -> {v}");
+        // A plane stays exactly a plane.
+        let mut pl = plane(8);
+        let mut g = Noise::new(6);
+        for p in pl.positions.iter_mut() {
+            if p.x > 0.0 && p.x < 1.0 && p.y > 0.0 && p.y < 1.0 {
+                p.x += 0.03 * g.gauss();
+                p.y += 0.03 * g.gauss();
+            }
+        }
+        let adj = Adjacency::build(&pl).unwrap();
+        centroid(&mut pl, &adj, &p, None, &Control::default()).unwrap();
+        assert!(pl.positions.iter().all(|p| p.z == 0.0));
+    }
+
+    #[test]
+    fn degenerate_input_gives_finite_positions() {
+        let mut m = degenerate();
+        for fix_boundary in [true, false] {
+            let p = CentroidParams {
+                fix_boundary,
+                ..Default::default()
+            };
+            let adj = Adjacency::build(&m).unwrap();
+            centroid(&mut m, &adj, &p, None, &Control::default()).unwrap();
+            assert!(all_finite(&m));
+            centroid(&mut m, &adj, &p, Some(&UnitSphere), &Control::default()).unwrap();
+            assert!(all_finite(&m), "{:?}", m.positions);
+        }
+    }
+}
