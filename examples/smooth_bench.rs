@@ -272,6 +272,7 @@ struct Opts {
     r: Option<f64>,
     passes: Option<usize>,
     sigma: Option<f64>,
+    free_boundary: bool,
 }
 
 fn parse_opts(args: &[String]) -> Res<Opts> {
@@ -283,9 +284,15 @@ fn parse_opts(args: &[String]) -> Res<Opts> {
         r: None,
         passes: None,
         sigma: None,
+        free_boundary: false,
     };
     let mut i = 0;
     while i < args.len() {
+        if args[i] == "--free-boundary" {
+            o.free_boundary = true;
+            i += 1;
+            continue;
+        }
         let v = args.get(i + 1).ok_or("missing value")?;
         match args[i].as_str() {
             "--method" => o.method = v.clone(),
@@ -324,6 +331,7 @@ fn run(m: &mut Mesh, adj: &Adjacency, o: &Opts) -> Res<smooth::SmoothReport> {
             if let Some(x) = o.sigma {
                 p.guide_sigma = x;
             }
+            p.fix_boundary = !o.free_boundary;
             smooth::anisotropic(m, adj, &p, &ctl)?
         }
         "arc" => {
@@ -334,6 +342,7 @@ fn run(m: &mut Mesh, adj: &Adjacency, o: &Opts) -> Res<smooth::SmoothReport> {
             if let Some(s) = o.step {
                 p.step = s;
             }
+            p.fix_boundary = !o.free_boundary;
             smooth::arc(m, adj, &p, &ctl)?
         }
         "centroid" => {
@@ -396,7 +405,30 @@ fn main() -> Res<()> {
             } else {
                 read_obj(&args[1])?
             };
-            let mut m = read_ply(&args[2])?;
+            // NOISY is a PLY file, or "noise:S" for Gaussian noise of S mean edge lengths along the
+            // vertex normals (seed 7), made here.
+            let mut m = match args[2].strip_prefix("noise:") {
+                Some(s) => {
+                    let mut m = clean.clone();
+                    let n = scansurf::mesh::normals::vertex_normals(&m);
+                    let sigma = s.parse::<f64>()? * m.mean_edge_length();
+                    let mut seed = 7u64;
+                    let mut uni = || {
+                        seed ^= seed >> 12;
+                        seed ^= seed << 25;
+                        seed ^= seed >> 27;
+                        ((seed.wrapping_mul(0x2545F4914F6CDD1D) >> 11) as f64 + 0.5)
+                            / (1u64 << 53) as f64
+                    };
+                    for (p, n) in m.positions.iter_mut().zip(n) {
+                        let g =
+                            (-2.0 * uni().ln()).sqrt() * (2.0 * std::f64::consts::PI * uni()).cos();
+                        *p += n * (sigma * g);
+                    }
+                    m
+                }
+                None => read_ply(&args[2])?,
+            };
             if m.faces != clean.faces {
                 return Err("noisy mesh's faces differ from the clean mesh's".into());
             }

@@ -7,10 +7,10 @@
 //!
 //! over the faces sharing a vertex with f, A_g the face area. The ring is walked through the
 //! vertex -> faces adjacency without building a face ring: a face sharing an edge with f is met
-//! twice and f itself three times, which acts as a spatial weight (3 : 2 : 1). Normals across a
-//! sharp edge differ by far more than sigma and barely mix; noise, whose normals scatter by less,
-//! averages out. The spatial weight of the original is left out: within one ring it is nearly
-//! constant, and the ring is the neighbourhood. The Cauchy range weight W replaces the Gaussian:
+//! twice and f itself three times, which stands in for the original's spatial Gaussian (within
+//! one ring that Gaussian is nearly constant anyway). Normals across a sharp edge differ by far
+//! more than sigma and barely mix; noise, whose normals scatter by less, averages out. The Cauchy
+//! range weight W replaces the Gaussian:
 //! the same shape near zero, a heavier tail, and no exponential (this runs on every face,
 //! several times per smoothing iteration).
 
