@@ -6,9 +6,10 @@
 //! - edge normal N_e = (N1 + N2) / |N1 + N2| (eq. 15),
 //! - weight W_lambda(H_e) = 1 for |H_e| < lambda, lambda^2 / (r (lambda - |H_e|)^2 + lambda^2)
 //!   above (eq. 19-20): edges that bend much (features) are kept out of the flow,
-//! - Delta[V] -= W_lambda(H_e) H_e N_e at both endpoints V_i, V_j (eq. 16-17),
+//! - `Delta[V]` -= W_lambda(H_e) H_e N_e at both endpoints V_i, V_j (eq. 16-17),
 //!
-//! then every vertex moves V += 3 s / (2 AREA[V]) Delta[V] (eq. 18), AREA[V] the area of its faces.
+//! then every vertex moves V += 3 s / (2 `AREA[V]`) `Delta[V]` (eq. 18), `AREA[V]` the area of
+//! its faces.
 //!
 //! H_e N_e is computed as |e| (u1 + u2), u_k the unit vector in face k perpendicular to e pointing
 //! away from that face's third vertex: |u1 + u2| = 2 cos(theta_e / 2) and u1 + u2 is parallel to
@@ -20,12 +21,12 @@
 //! Additions to the seed, each needed for the defaults to work on noisy scans (measured in
 //! docs/BENCHMARKS.md, "## smooth"):
 //! - The weight's |H_e| is taken on face normals after two bilateral filter passes
-//!   ([`super::normal_filter`]): |H_e| = |e| |m1 - m2| = 2 |e| sin(angle(m1, m2) / 2), the same
+//!   (`normal_filter.rs`): |H_e| = |e| |m1 - m2| = 2 |e| sin(angle(m1, m2) / 2), the same
 //!   quantity as eq. 14 on a denoised normal field. On raw normals, noise of a third of an edge
 //!   length bends edges as much as a feature does, so eq. 19-20 either freeze the noise or let
 //!   the features melt (noisy fandisk: about 7 degrees mean normal error at best, with the sharp
 //!   edges' angles off by 20 degrees). The motion itself (H_e N_e, eq. 16-18) stays on the real geometry.
-//! - The step is capped per vertex ([`MAX_FACTOR`]) so that a tiny AREA[V] (slivers, needles)
+//! - The step is capped per vertex (`MAX_FACTOR`) so that a tiny `AREA[V]` (slivers, needles)
 //!   cannot make the explicit step explode.
 //! - The volume of closed, consistently oriented components is held at its initial value (the
 //!   flow otherwise shrinks a sphere of radius R by about 2 s / R per iteration).
@@ -87,7 +88,7 @@ impl Default for AnisotropicParams {
     }
 }
 
-/// Largest factor 3 s / (2 AREA[V]) of eq. 18 allowed at a vertex: the explicit flow is stable
+/// Largest factor 3 s / (2 `AREA[V]`) of eq. 18 allowed at a vertex: the explicit flow is stable
 /// on regular meshes up to about 0.14; on an equilateral mesh the default step gives 0.115, so
 /// the cap binds where triangles are smaller than the mean.
 const MAX_FACTOR: f64 = 0.1;

@@ -1,9 +1,9 @@
 //! Mesh smoothing passes, run on a triangle mesh in place:
-//! - [`anisotropic`]: feature-preserving anisotropic mean-curvature flow (seed 000 eq. 14-20,
+//! - [`anisotropic()`]: feature-preserving anisotropic mean-curvature flow (seed 000 eq. 14-20,
 //!   after Hildebrandt & Polthier 2004): removes scanner noise, keeps sharp edges and corners.
-//! - [`arc`]: circular-arc smoothing (seed 002 section 3.5, after Karbacher & Hausler): moves each
+//! - [`arc()`]: circular-arc smoothing (seed 002 section 3.5, after Karbacher & Hausler): moves each
 //!   vertex along its normal until it lies on circular arcs through its neighbours.
-//! - [`centroid`]: area-weighted centroid relaxation (seed 003 eq. 9, seed 000 eq. 13): improves
+//! - [`centroid()`]: area-weighted centroid relaxation (seed 003 eq. 9, seed 000 eq. 13): improves
 //!   triangle shapes, tangentially or with re-projection onto an implicit surface.
 //!
 //! All three share [`Control`] (region mask, progress callback) and return a [`SmoothReport`].
