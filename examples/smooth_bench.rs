@@ -396,6 +396,20 @@ fn torus(n: usize) -> Mesh {
     m
 }
 
+/// CPU seconds (user + system, all threads) this process has used so far; Linux only, 0 elsewhere.
+/// The shared benchmark machine is often loaded, so CPU time is the figure that carries over.
+fn cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0.0;
+    };
+    // Fields after the parenthesised command name; utime and stime are the 12th and 13th.
+    let rest = stat.rsplit(')').next().unwrap_or("");
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = f.get(11).and_then(|x| x.parse().ok()).unwrap_or(0.0)
+        + f.get(12).and_then(|x| x.parse().ok()).unwrap_or(0.0);
+    ticks / 100.0
+}
+
 fn main() -> Res<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
@@ -453,16 +467,20 @@ fn main() -> Res<()> {
                 m.faces.len(),
                 rayon::current_num_threads()
             );
-            let t = Instant::now();
+            let (t, c0) = (Instant::now(), cpu_seconds());
             let adj = Adjacency::build(&m)?;
-            let ta = t.elapsed().as_secs_f64();
+            let (ta, c1) = (t.elapsed().as_secs_f64(), cpu_seconds());
             let rep = run(&mut m, &adj, &o)?;
+            let c2 = cpu_seconds();
             println!(
-                "adjacency {ta:.2} s, {} x{} {:.2} s, total {:.2} s",
+                "adjacency {ta:.2} s wall ({:.2} s cpu), {} x{} {:.2} s wall ({:.2} s cpu), total {:.2} s wall ({:.2} s cpu)",
+                c1 - c0,
                 rep.method,
                 rep.iterations,
                 rep.seconds,
-                t.elapsed().as_secs_f64()
+                c2 - c1,
+                t.elapsed().as_secs_f64(),
+                c2 - c0
             );
         }
         _ => {

@@ -41,7 +41,7 @@ use super::common::{
     check_finite, displacement_stats, mean_edge_length, movable, Control, SmoothReport,
     VolumeConstraint,
 };
-use super::normal_filter::filter_normals;
+use super::normal_filter::{filter_normals, unpack, PackedNormal};
 use crate::error::{Error, Result};
 use crate::mesh::adjacency::Adjacency;
 use crate::mesh::Mesh;
@@ -173,7 +173,7 @@ pub fn anisotropic(
     let nf = mesh.faces.len();
     let mut normals: Vec<Vector3<f64>> = Vec::with_capacity(nf);
     let mut areas: Vec<f64> = Vec::with_capacity(nf);
-    let mut guide: Vec<Vector3<f64>> = Vec::with_capacity(nf);
+    let mut guide: Vec<PackedNormal> = Vec::with_capacity(nf);
     let mut edge_vec: Vec<Vector3<f64>> = Vec::with_capacity(adj.edges.len());
     let mut next: Vec<Point3<f64>> = Vec::with_capacity(mesh.positions.len());
     let mut grads: Vec<Vector3<f64>> = Vec::new();
@@ -225,7 +225,7 @@ pub fn anisotropic(
                 };
                 let (pa, pb) = (&pos[a as usize], &pos[b as usize]);
                 let hn = edge_curvature(pa, pb, &pos[c1 as usize], &pos[c2 as usize]);
-                let (m1, m2) = (guide[f1], guide[f2]);
+                let (m1, m2) = (unpack(&guide[f1]), unpack(&guide[f2]));
                 let h = if m1.norm_squared() > 0.0 && m2.norm_squared() > 0.0 {
                     (m1 - m2).norm() * (pb - pa).norm()
                 } else {

@@ -18,8 +18,13 @@ use crate::mesh::adjacency::Adjacency;
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+/// A filtered unit face normal and the face's area, packed in `f32` so that one 16-byte load
+/// brings both (the filter reads every face's ring twice per pass; `f32` is ample for a weight).
+pub(crate) type PackedNormal = [f32; 4];
+
 /// `passes` bilateral passes over the unit face normals `normals` (zero for degenerate faces,
-/// which neither receive nor give), weighted by `areas`; the result in `out`.
+/// which neither receive nor give), weighted by `areas`; the result in `out` as
+/// `[nx, ny, nz, area]`.
 pub(crate) fn filter_normals(
     faces: &[[u32; 3]],
     adj: &Adjacency,
@@ -27,35 +32,42 @@ pub(crate) fn filter_normals(
     normals: &[Vector3<f64>],
     sigma: f64,
     passes: usize,
-    out: &mut Vec<Vector3<f64>>,
+    out: &mut Vec<PackedNormal>,
 ) {
-    out.clear();
-    out.extend_from_slice(normals);
+    normals
+        .par_iter()
+        .zip(areas)
+        .map(|(n, &a)| [n.x as f32, n.y as f32, n.z as f32, a as f32])
+        .collect_into_vec(out);
     if passes == 0 || sigma.is_nan() || sigma <= 0.0 {
         return;
     }
-    let inv_s2 = 1.0 / (sigma * sigma);
-    let mut tmp: Vec<Vector3<f64>> = Vec::with_capacity(normals.len());
+    let inv_s2 = (1.0 / (sigma * sigma)) as f32;
+    let mut tmp: Vec<PackedNormal> = Vec::with_capacity(normals.len());
     for _ in 0..passes {
-        let cur: &[Vector3<f64>] = out;
+        let cur: &[PackedNormal] = out;
         (0..cur.len())
             .into_par_iter()
             .map(|f| {
                 let nf = cur[f];
-                if nf.norm_squared() == 0.0 {
+                if nf[0] == 0.0 && nf[1] == 0.0 && nf[2] == 0.0 {
                     return nf;
                 }
-                let mut s = Vector3::zeros();
+                let mut s = [0f32; 3];
                 for &v in &faces[f] {
                     for &g in adj.faces_of_vertex(v as usize) {
                         let ng = cur[g as usize];
-                        let d2 = (nf - ng).norm_squared();
-                        s += ng * (areas[g as usize] / (1.0 + d2 * inv_s2));
+                        let d = [nf[0] - ng[0], nf[1] - ng[1], nf[2] - ng[2]];
+                        let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                        let w = ng[3] / (1.0 + d2 * inv_s2);
+                        s[0] += w * ng[0];
+                        s[1] += w * ng[1];
+                        s[2] += w * ng[2];
                     }
                 }
-                let l = s.norm();
+                let l = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
                 if l > 0.0 && l.is_finite() {
-                    s / l
+                    [s[0] / l, s[1] / l, s[2] / l, nf[3]]
                 } else {
                     nf
                 }
@@ -63,6 +75,11 @@ pub(crate) fn filter_normals(
             .collect_into_vec(&mut tmp);
         std::mem::swap(out, &mut tmp);
     }
+}
+
+/// The normal part of a packed normal, in `f64`.
+pub(crate) fn unpack(p: &PackedNormal) -> Vector3<f64> {
+    Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64)
 }
 
 #[cfg(test)]
