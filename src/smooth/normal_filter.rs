@@ -122,6 +122,7 @@ mod tests {
         noisy[k] = (clean[k] + Vector3::new(0.0, 0.36, 0.0)).normalize();
         let mut out = Vec::new();
         filter_normals(&m.faces, &adj, &areas, &noisy, 0.35, 3, &mut out);
+        let out: Vec<Vector3<f64>> = out.iter().map(unpack).collect();
         let ang =
             |a: &Vector3<f64>, b: &Vector3<f64>| a.dot(b).clamp(-1.0, 1.0).acos().to_degrees();
         assert!(ang(&out[k], &clean[k]) < 5.0, "{}", ang(&out[k], &clean[k]));
