@@ -415,6 +415,55 @@ mod tests {
     }
 
     #[test]
+    fn open_cap_does_not_sink() {
+        // The sphere's faces above z = 0.3: an open cap with a fixed rim.
+        let mut cap = sphere(4);
+        let keep: Vec<[u32; 3]> = cap
+            .faces
+            .iter()
+            .copied()
+            .filter(|f| f.iter().all(|&v| cap.positions[v as usize].z > 0.3))
+            .collect();
+        cap.faces = keep;
+        let h = cap.mean_edge_length();
+        add_normal_noise(&mut cap, 0.3 * h, 21);
+        let adj = Adjacency::build(&cap).unwrap();
+        let inner: Vec<usize> = (0..cap.positions.len())
+            .filter(|&v| !adj.faces_of_vertex(v).is_empty() && !adj.is_boundary_or_singular(v))
+            .collect();
+        let mean_radius = |m: &Mesh| {
+            inner
+                .iter()
+                .map(|&v| m.positions[v].coords.norm())
+                .sum::<f64>()
+                / inner.len() as f64
+        };
+        let r0 = mean_radius(&cap);
+        let p = AnisotropicParams {
+            iterations: 20,
+            ..Default::default()
+        };
+        let mut a = cap.clone();
+        anisotropic(&mut a, &adj, &p, &Control::default()).unwrap();
+        assert!(
+            (mean_radius(&a) - r0).abs() < 0.1 * h,
+            "{r0} -> {}",
+            mean_radius(&a)
+        );
+        let mut b = cap.clone();
+        let free = AnisotropicParams {
+            preserve_volume: false,
+            ..p
+        };
+        anisotropic(&mut b, &adj, &free, &Control::default()).unwrap();
+        assert!(
+            mean_radius(&b) < r0 - 0.2 * h,
+            "{r0} -> {}",
+            mean_radius(&b)
+        );
+    }
+
+    #[test]
     fn degenerate_input_gives_finite_positions() {
         let mut m = degenerate();
         for fix_boundary in [true, false] {

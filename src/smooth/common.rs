@@ -177,19 +177,26 @@ pub(crate) fn displacement_stats(
     (n, mean, max)
 }
 
-/// Volume constraint for the closed, consistently oriented components of a mesh: after each
-/// iteration the movable vertices of such a component are moved along the volume gradient
+/// Volume constraint for the consistently oriented, edge-manifold components of a mesh: after
+/// each iteration the movable vertices of such a component are moved along the volume gradient
 /// (grad_v Vol = 1/6 sum over the faces at v of their crosses) by the one Newton step that restores
-/// the component's initial enclosed volume. Mean-curvature flow shrinks a closed surface at a rate
-/// set by its curvature (a sphere of radius R by 2 s / R per step); this undoes the shrinkage
-/// without touching the shape's details, the volume-preserving variant of the flow.
+/// the component's initial volume. Mean-curvature flow shrinks a closed surface at a rate set by
+/// its curvature (a sphere of radius R by 2 s / R per step); this undoes the shrinkage without
+/// touching the shape's details, the volume-preserving variant of the flow.
+///
+/// An open component's volume is that of the surface with its holes capped by cones to the
+/// component's initial centroid: while the boundary stays fixed the caps do not move, so the
+/// constraint is exactly "no net motion along the normals" and holds an open scan or a hole fill
+/// from sinking as well.
 pub(crate) struct VolumeConstraint {
     /// Component per vertex (`u32::MAX` for vertices without faces).
     vertex_component: Vec<u32>,
     /// Component per face.
     face_component: Vec<u32>,
-    /// Whether the component is closed and consistently oriented.
+    /// Whether the component is consistently oriented with no edge of three or more faces.
     closed: Vec<bool>,
+    /// Initial centroid per component, the apex of the hole caps.
+    origin: Vec<Vector3<f64>>,
     /// Initial volume per component.
     target: Vec<f64>,
 }
@@ -220,14 +227,15 @@ impl VolumeConstraint {
         for (e, ed) in adj.edges.iter().enumerate() {
             let fs = adj.faces_of_edge(e);
             let c = vertex_component[ed[0] as usize] as usize;
-            let ok = fs.len() == 2 && {
-                // The two faces must walk the edge in opposite directions.
-                let dir = |f: u32| {
-                    let t = mesh.faces[f as usize];
-                    (0..3).any(|k| t[k] == ed[0] && t[(k + 1) % 3] == ed[1])
+            let ok = fs.len() == 1
+                || fs.len() == 2 && {
+                    // The two faces must walk the edge in opposite directions.
+                    let dir = |f: u32| {
+                        let t = mesh.faces[f as usize];
+                        (0..3).any(|k| t[k] == ed[0] && t[(k + 1) % 3] == ed[1])
+                    };
+                    dir(fs[0]) != dir(fs[1])
                 };
-                dir(fs[0]) != dir(fs[1])
-            };
             if !ok {
                 closed[c] = false;
             }
@@ -237,10 +245,22 @@ impl VolumeConstraint {
             .iter()
             .map(|f| vertex_component[f[0] as usize])
             .collect();
+        let mut origin = vec![Vector3::zeros(); ncomp as usize];
+        let mut count = vec![0usize; ncomp as usize];
+        for (p, &c) in mesh.positions.iter().zip(&vertex_component) {
+            if c != u32::MAX {
+                origin[c as usize] += p.coords;
+                count[c as usize] += 1;
+            }
+        }
+        for (o, n) in origin.iter_mut().zip(&count) {
+            *o /= (*n).max(1) as f64;
+        }
         let mut vc = VolumeConstraint {
             vertex_component,
             face_component,
             closed,
+            origin,
             target: Vec::new(),
         };
         vc.target = vc.volumes(&mesh.faces, &mesh.positions);
@@ -252,7 +272,8 @@ impl VolumeConstraint {
         !self.closed.iter().any(|&c| c)
     }
 
-    /// Enclosed volume per component: per-face terms in parallel, added in face order.
+    /// Volume per component (holes capped to `origin`): per-face terms in parallel, added in
+    /// face order.
     fn volumes(&self, faces: &[[u32; 3]], positions: &[Point3<f64>]) -> Vec<f64> {
         let terms: Vec<f64> = faces
             .par_iter()
@@ -261,9 +282,10 @@ impl VolumeConstraint {
                 if c == u32::MAX || !self.closed[c as usize] {
                     return 0.0;
                 }
-                let a = positions[f[0] as usize].coords;
-                let b = positions[f[1] as usize].coords;
-                let d = positions[f[2] as usize].coords;
+                let o = self.origin[c as usize];
+                let a = positions[f[0] as usize].coords - o;
+                let b = positions[f[1] as usize].coords - o;
+                let d = positions[f[2] as usize].coords - o;
                 a.dot(&b.cross(&d)) / 6.0
             })
             .collect();
