@@ -446,7 +446,7 @@ mod tests {
         let mut a = cap.clone();
         anisotropic(&mut a, &adj, &p, &Control::default()).unwrap();
         assert!(
-            (mean_radius(&a) - r0).abs() < 0.1 * h,
+            (mean_radius(&a) - r0).abs() < 0.02 * h,
             "{r0} -> {}",
             mean_radius(&a)
         );
