@@ -273,6 +273,7 @@ struct Opts {
     passes: Option<usize>,
     sigma: Option<f64>,
     free_boundary: bool,
+    no_volume: bool,
 }
 
 fn parse_opts(args: &[String]) -> Res<Opts> {
@@ -285,11 +286,17 @@ fn parse_opts(args: &[String]) -> Res<Opts> {
         passes: None,
         sigma: None,
         free_boundary: false,
+        no_volume: false,
     };
     let mut i = 0;
     while i < args.len() {
         if args[i] == "--free-boundary" {
             o.free_boundary = true;
+            i += 1;
+            continue;
+        }
+        if args[i] == "--no-volume" {
+            o.no_volume = true;
             i += 1;
             continue;
         }
@@ -332,6 +339,7 @@ fn run(m: &mut Mesh, adj: &Adjacency, o: &Opts) -> Res<smooth::SmoothReport> {
                 p.guide_sigma = x;
             }
             p.fix_boundary = !o.free_boundary;
+            p.preserve_volume = !o.no_volume;
             smooth::anisotropic(m, adj, &p, &ctl)?
         }
         "arc" => {

@@ -26,8 +26,8 @@
 //!   length bends edges as much as a feature does, so eq. 19-20 either freeze the noise or let
 //!   the features melt (noisy fandisk: about 7 degrees mean normal error at best, with the sharp
 //!   edges' angles off by 20 degrees). The motion itself (H_e N_e, eq. 16-18) stays on the real geometry.
-//! - The step is capped per vertex (`MAX_FACTOR`) so that a tiny `AREA[V]` (slivers, needles)
-//!   cannot make the explicit step explode.
+//! - The step is capped per vertex (`STABILITY`) so that obtuse or sliver triangles cannot make
+//!   the explicit step overshoot, flip faces or explode.
 //! - The volume of closed, consistently oriented components is held at its initial value (the
 //!   flow otherwise shrinks a sphere of radius R by about 2 s / R per iteration).
 //! - Boundary and non-manifold vertices stay put (unless `fix_boundary` is false; boundary edges
@@ -88,10 +88,11 @@ impl Default for AnisotropicParams {
     }
 }
 
-/// Largest factor 3 s / (2 `AREA[V]`) of eq. 18 allowed at a vertex: the explicit flow is stable
-/// on regular meshes up to about 0.14; on an equilateral mesh the default step gives 0.115, so
-/// the cap binds where triangles are smaller than the mean.
-const MAX_FACTOR: f64 = 0.1;
+/// The factor 3 s / (2 `AREA[V]`) of eq. 18 is capped at `STABILITY / sum of the stiffnesses` of
+/// the edges at V (see [`edge_curvature`]): below 1 the explicit step cannot overshoot the
+/// neighbours, so obtuse and sliver triangles cannot make it blow up or flip faces. On an
+/// equilateral mesh the cap is 0.8 / 6.93 = 0.115, what the default step gives there.
+const STABILITY: f64 = 0.8;
 
 /// Weight of eq. 19-20.
 fn weight(h: f64, lambda: f64, r: f64) -> f64 {
@@ -104,29 +105,35 @@ fn weight(h: f64, lambda: f64, r: f64) -> f64 {
     }
 }
 
-/// H_e N_e of eq. 14-15 for edge (a, b) with third vertices c1, c2 (see the module docs); zero
-/// when the edge or a face is degenerate.
+/// H_e N_e of eq. 14-15 for edge (a, b) with third vertices c1, c2 (see the module docs), and
+/// the edge's stiffness |cot alpha1| + |cot alpha2| (alpha_k the angle at c_k): with W = 1 the
+/// sum of H_e N_e at a vertex is sum_j (cot alpha_j + cot beta_j) (V - V_j), so the explicit step
+/// is a convex combination of V and its neighbours while the factor of eq. 18 stays under
+/// 1 / sum of the stiffnesses. A degenerate edge or face gives zero curvature and infinite
+/// stiffness (its vertices hold still).
 fn edge_curvature(
     a: &Point3<f64>,
     b: &Point3<f64>,
     c1: &Point3<f64>,
     c2: &Point3<f64>,
-) -> Vector3<f64> {
+) -> (Vector3<f64>, f64) {
     let e = b - a;
     let len = e.norm();
     if len <= 0.0 || !len.is_finite() {
-        return Vector3::zeros();
+        return (Vector3::zeros(), f64::INFINITY);
     }
     let t = e / len;
-    let out = |c: &Point3<f64>| -> Option<Vector3<f64>> {
-        let w = a - c;
-        let w = w - t * w.dot(&t);
+    // Unit vector from c's side across the edge, and |cot| of the angle at c.
+    let out = |c: &Point3<f64>| -> Option<(Vector3<f64>, f64)> {
+        let (ca, cb) = (a - c, b - c);
+        let w = ca - t * ca.dot(&t);
         let l = w.norm();
-        (l > 1e-12 * len && l.is_finite()).then(|| w / l)
+        // |ca x cb| = |e| l.
+        (l > 1e-12 * len && l.is_finite()).then(|| (w / l, (ca.dot(&cb) / (len * l)).abs()))
     };
     match (out(c1), out(c2)) {
-        (Some(u1), Some(u2)) => (u1 + u2) * len,
-        _ => Vector3::zeros(),
+        (Some((u1, k1)), Some((u2, k2))) => ((u1 + u2) * len, k1 + k2),
+        _ => (Vector3::zeros(), f64::INFINITY),
     }
 }
 
@@ -174,7 +181,7 @@ pub fn anisotropic(
     let mut normals: Vec<Vector3<f64>> = Vec::with_capacity(nf);
     let mut areas: Vec<f64> = Vec::with_capacity(nf);
     let mut guide: Vec<PackedNormal> = Vec::with_capacity(nf);
-    let mut edge_vec: Vec<Vector3<f64>> = Vec::with_capacity(adj.edges.len());
+    let mut edge_vec: Vec<(Vector3<f64>, f64)> = Vec::with_capacity(adj.edges.len());
     let mut next: Vec<Point3<f64>> = Vec::with_capacity(mesh.positions.len());
     let mut grads: Vec<Vector3<f64>> = Vec::new();
 
@@ -215,23 +222,24 @@ pub fn anisotropic(
             .map(|(e, &[a, b])| {
                 let fs = adj.faces_of_edge(e);
                 if fs.len() != 2 {
-                    return Vector3::zeros();
+                    // Boundary and non-manifold edges take no part.
+                    return (Vector3::zeros(), 0.0);
                 }
                 let (f1, f2) = (fs[0] as usize, fs[1] as usize);
                 let (Some(c1), Some(c2)) =
                     (third(&mesh.faces[f1], a, b), third(&mesh.faces[f2], a, b))
                 else {
-                    return Vector3::zeros();
+                    return (Vector3::zeros(), f64::INFINITY);
                 };
                 let (pa, pb) = (&pos[a as usize], &pos[b as usize]);
-                let hn = edge_curvature(pa, pb, &pos[c1 as usize], &pos[c2 as usize]);
+                let (hn, stiff) = edge_curvature(pa, pb, &pos[c1 as usize], &pos[c2 as usize]);
                 let (m1, m2) = (unpack(&guide[f1]), unpack(&guide[f2]));
                 let h = if m1.norm_squared() > 0.0 && m2.norm_squared() > 0.0 {
                     (m1 - m2).norm() * (pb - pa).norm()
                 } else {
                     hn.norm()
                 };
-                hn * weight(h, lambda, r)
+                (hn * weight(h, lambda, r), stiff)
             })
             .collect_into_vec(&mut edge_vec);
         // Per vertex: gather eq. 16-17, move by eq. 18; also the volume gradient (1/3) sum A n.
@@ -251,12 +259,15 @@ pub fn anisotropic(
                 if area <= 0.0 {
                     return (p, Vector3::zeros());
                 }
-                let delta: Vector3<f64> = -adj
-                    .edges_of(v)
-                    .iter()
-                    .map(|&e| edge_vec[e as usize])
-                    .sum::<Vector3<f64>>();
-                let factor = (1.5 * step / area).min(MAX_FACTOR);
+                let mut delta = Vector3::zeros();
+                let mut stiff = 0.0;
+                for &e in adj.edges_of(v) {
+                    let (hn, k) = edge_vec[e as usize];
+                    delta -= hn;
+                    stiff += k;
+                }
+                let cap = if stiff > 0.0 { STABILITY / stiff } else { 0.0 };
+                let factor = (1.5 * step / area).min(cap);
                 let q = p + delta * factor;
                 if q.iter().all(|x| x.is_finite()) {
                     (q, grad / 3.0)
