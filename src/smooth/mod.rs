@@ -7,6 +7,35 @@
 //!   triangle shapes, tangentially or with re-projection onto an implicit surface.
 //!
 //! All three share [`Control`] (region mask, progress callback) and return a [`SmoothReport`].
+//! Build the mesh's [`Adjacency`] once and pass it to as many passes as needed:
+//!
+//! ```
+//! use scansurf::mesh::Mesh;
+//! use scansurf::smooth::{self, Adjacency, AnisotropicParams, Control};
+//! use nalgebra::Point3;
+//!
+//! // A bent quad strip; any triangle mesh will do.
+//! let mut mesh = Mesh {
+//!     positions: (0..8)
+//!         .map(|i| Point3::new((i / 2) as f64, (i % 2) as f64, ((i / 2) % 2) as f64 * 0.1))
+//!         .collect(),
+//!     normals: None,
+//!     faces: (0..3u32)
+//!         .flat_map(|k| [[2 * k, 2 * k + 2, 2 * k + 3], [2 * k, 2 * k + 3, 2 * k + 1]])
+//!         .collect(),
+//! };
+//! let adj = Adjacency::build(&mesh)?;
+//! // Smooth only vertex 2 and its one-ring, reporting progress.
+//! let mut seed = vec![false; mesh.positions.len()];
+//! seed[2] = true;
+//! let region = adj.grow_rings(&seed, 1);
+//! let progress = |done: usize, total: usize| eprintln!("{done}/{total}");
+//! let control = Control { region: Some(&region), progress: Some(&progress) };
+//! let report = smooth::anisotropic(&mut mesh, &adj, &AnisotropicParams::default(), &control)?;
+//! assert_eq!(report.iterations, 15);
+//! println!("{}", serde_json::to_string(&report).unwrap());
+//! # Ok::<(), scansurf::Error>(())
+//! ```
 //! Every pass gathers per vertex (each new position is computed from the old mesh by one thread),
 //! so the result does not depend on the number of threads; sums across the mesh are taken in a
 //! fixed order. Memory is linear in the mesh.
