@@ -61,7 +61,7 @@ pub struct AnisotropicParams {
     /// Time step s of eq. 18, an area (default 0.2 l^2; see also the per-vertex cap).
     pub step: Option<f64>,
     /// Curvature threshold lambda of eq. 19-20, a length (default 0.2 l: an edge of mean length
-    /// whose faces' filtered normals differ by about 11.5 degrees).
+    /// whose faces' filtered normals differ by about 11.5 degrees). 0 holds every edge still.
     pub lambda: Option<f64>,
     /// Fall-off r of eq. 20 (default 100): how fast the weight drops past lambda.
     pub r: f64,
@@ -70,7 +70,8 @@ pub struct AnisotropicParams {
     pub guide_passes: usize,
     /// Range sigma of those passes, on |n1 - n2| (default 0.7).
     pub guide_sigma: f64,
-    /// Hold the enclosed volume of closed components (default true).
+    /// Hold the volume of every consistently oriented component, open ones with their holes
+    /// capped (default true; see `VolumeConstraint` in `common.rs`).
     pub preserve_volume: bool,
     /// Keep boundary and non-manifold vertices fixed (default true).
     pub fix_boundary: bool,

@@ -44,7 +44,7 @@ pub struct SmoothReport {
     pub max_displacement: f64,
     /// Mean edge length of the input, the unit of the default parameters.
     pub mean_edge_length: f64,
-    /// Wall-clock seconds, adjacency included.
+    /// Wall-clock seconds of the pass (the caller builds the adjacency).
     pub seconds: f64,
     /// The parameters actually used, defaults resolved.
     pub parameters: serde_json::Value,

@@ -53,3 +53,72 @@ pub use anisotropic::{anisotropic, AnisotropicParams};
 pub use arc::{arc, ArcParams};
 pub use centroid::{centroid, CentroidParams};
 pub use common::{Control, SmoothReport};
+
+/// One of the three passes with its parameters, for callers that choose at run time (the CLI's
+/// `--method`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Method {
+    /// [`anisotropic()`]: feature preserving, for scans of machined parts.
+    Anisotropic(AnisotropicParams),
+    /// [`arc()`]: circular arcs, for organic shapes.
+    Arc(ArcParams),
+    /// [`centroid()`]: triangle quality, with re-projection onto an implicit when one is given.
+    Centroid(CentroidParams),
+}
+
+impl Method {
+    /// The pass named `anisotropic`, `arc` or `centroid` with its default parameters.
+    pub fn by_name(name: &str) -> crate::Result<Method> {
+        match name {
+            "anisotropic" => Ok(Method::Anisotropic(AnisotropicParams::default())),
+            "arc" => Ok(Method::Arc(ArcParams::default())),
+            "centroid" => Ok(Method::Centroid(CentroidParams::default())),
+            _ => Err(crate::Error::InvalidOption(format!(
+                "unknown smoothing method {name:?} (anisotropic, arc or centroid)"
+            ))),
+        }
+    }
+
+    /// Sets the number of iterations.
+    pub fn with_iterations(mut self, n: usize) -> Method {
+        match &mut self {
+            Method::Anisotropic(p) => p.iterations = n,
+            Method::Arc(p) => p.iterations = n,
+            Method::Centroid(p) => p.iterations = n,
+        }
+        self
+    }
+}
+
+/// Runs `method` on `mesh` in place. `surface`, when given, is what centroid relaxation projects
+/// onto (the other passes ignore it).
+pub fn run(
+    mesh: &mut crate::mesh::Mesh,
+    adj: &Adjacency,
+    method: &Method,
+    surface: Option<&dyn crate::implicit::Implicit>,
+    control: &Control,
+) -> crate::Result<SmoothReport> {
+    match method {
+        Method::Anisotropic(p) => anisotropic(mesh, adj, p, control),
+        Method::Arc(p) => arc(mesh, adj, p, control),
+        Method::Centroid(p) => centroid(mesh, adj, p, surface, control),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn methods_by_name() {
+        let mut m = testing::sphere(2);
+        let adj = Adjacency::build(&m).unwrap();
+        for name in ["anisotropic", "arc", "centroid"] {
+            let method = Method::by_name(name).unwrap().with_iterations(3);
+            let rep = run(&mut m, &adj, &method, None, &Control::default()).unwrap();
+            assert_eq!((rep.method, rep.iterations), (name, 3));
+        }
+        assert!(Method::by_name("taubin").is_err());
+    }
+}
