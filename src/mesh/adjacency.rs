@@ -39,6 +39,8 @@ pub struct Adjacency {
     pub vertex_face_offsets: Vec<u32>,
     /// Faces per vertex.
     pub vertex_faces: Vec<u32>,
+    /// Number of faces of the mesh it was built for.
+    pub face_count: usize,
 }
 
 fn prefix_offsets(counts: &[u32]) -> Vec<u32> {
@@ -159,7 +161,14 @@ impl Adjacency {
             ring_edges,
             vertex_face_offsets,
             vertex_faces,
+            face_count: nf,
         })
+    }
+
+    /// True when this adjacency was built for a mesh of `mesh`'s vertex and face counts (the
+    /// passes check it before indexing).
+    pub fn fits(&self, mesh: &Mesh) -> bool {
+        self.vertex_count() == mesh.positions.len() && self.face_count == mesh.faces.len()
     }
 
     /// Number of vertices the adjacency was built for.

@@ -515,6 +515,16 @@ mod tests {
             ..Default::default()
         };
         assert!(anisotropic(&mut m, &adj, &p, &Control::default()).is_err());
+        // An adjacency of another mesh is refused, not indexed out of bounds.
+        let mut other = plane(3);
+        other.faces.truncate(5);
+        assert!(anisotropic(
+            &mut other,
+            &adj,
+            &AnisotropicParams::default(),
+            &Control::default()
+        )
+        .is_err());
     }
 
     #[test]

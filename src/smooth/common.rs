@@ -53,11 +53,13 @@ pub struct SmoothReport {
 /// Fails on a non-finite coordinate of a vertex some face uses (nothing sensible can be
 /// computed around it).
 pub(crate) fn check_finite(mesh: &Mesh, adj: &Adjacency) -> Result<()> {
-    if adj.vertex_count() != mesh.positions.len() {
+    if !adj.fits(mesh) {
         return Err(Error::InvalidOption(format!(
-            "adjacency built for {} vertices, mesh has {}",
+            "adjacency built for {} vertices and {} faces, mesh has {} and {}",
             adj.vertex_count(),
-            mesh.positions.len()
+            adj.face_count,
+            mesh.positions.len(),
+            mesh.faces.len()
         )));
     }
     let bad = mesh
