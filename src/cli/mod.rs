@@ -3,6 +3,7 @@
 
 mod inspect;
 pub mod progress;
+mod smooth;
 
 use clap::{Parser, Subcommand};
 
@@ -24,6 +25,11 @@ pub enum Command {
         after_help = "Example:\n  scansurf inspect scan.ply\n  scansurf inspect bunny.obj --json > bunny.json"
     )]
     Inspect(inspect::Args),
+    /// Smooth a noisy mesh: anisotropic (keeps sharp edges), circular-arc, or centroid.
+    #[command(
+        after_help = "Examples:\n  scansurf smooth noisy.ply -o smooth.ply\n  scansurf smooth scan.obj -o out.obj --method arc --iterations 20 --report smooth.json\n  scansurf smooth filled.ply -o out.ply --only-region 69451 --rings 3"
+    )]
+    Smooth(smooth::Args),
 }
 
 /// Runs the command line; returns the process exit code.
@@ -37,6 +43,7 @@ pub fn run() -> i32 {
     };
     let result = match cli.command {
         Command::Inspect(a) => inspect::run(a, cli.quiet),
+        Command::Smooth(a) => smooth::run(a, cli.quiet),
     };
     match result {
         Ok(()) => 0,
@@ -45,4 +52,17 @@ pub fn run() -> i32 {
             1
         }
     }
+}
+
+/// Writes a report as pretty JSON, atomically.
+pub(crate) fn write_json<T: serde::Serialize>(
+    path: &std::path::Path,
+    value: &T,
+) -> crate::Result<()> {
+    let text = serde_json::to_string_pretty(value)
+        .map_err(|e| crate::Error::Numerical(format!("cannot serialize the report: {e}")))?;
+    crate::io::write_atomic(path, |w| {
+        w.write_all(text.as_bytes())?;
+        w.write_all(b"\n")
+    })
 }

@@ -4,6 +4,7 @@
 //! `f64`; faces index into `positions` with `u32` (4 billion vertices is far past what fits in
 //! memory for this tool's inputs).
 
+pub mod adjacency;
 pub mod normals;
 pub mod topology;
 
