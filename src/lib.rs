@@ -11,6 +11,7 @@ pub mod implicit;
 pub mod inspect;
 pub mod io;
 pub mod mesh;
+pub mod render;
 
 pub use error::{Error, Result};
 pub use mesh::Mesh;
