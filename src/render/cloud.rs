@@ -19,8 +19,12 @@ const K: usize = 12;
 const SPACING_K: usize = 4;
 
 /// Unit normals (arbitrary sign; zero where the neighbourhood is degenerate) and the median
-/// spacing of the points.
-pub fn normals_and_spacing(points: &[Point3<f64>]) -> Result<(Vec<Vector3<f64>>, f64)> {
+/// spacing of the points. With `want_normals` false only the spacing is measured (a cheaper
+/// query) and the normals come back empty.
+pub fn normals_and_spacing(
+    points: &[Point3<f64>],
+    want_normals: bool,
+) -> Result<(Vec<Vector3<f64>>, f64)> {
     if points.is_empty() {
         return Err(Error::Degenerate("no points".into()));
     }
@@ -30,7 +34,8 @@ pub fn normals_and_spacing(points: &[Point3<f64>]) -> Result<(Vec<Vector3<f64>>,
     let entries: Vec<[f64; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
     let tree: ImmutableKdTree<f64, 3> = ImmutableKdTree::new_from_slice(&entries)
         .map_err(|e| Error::Degenerate(format!("k-d tree construction: {e:?}")))?;
-    let k = NonZeroUsize::new(K.min(points.len())).unwrap_or(NonZeroUsize::MIN);
+    let k = if want_normals { K } else { SPACING_K + 1 };
+    let k = NonZeroUsize::new(k.min(points.len())).unwrap_or(NonZeroUsize::MIN);
     let per_point: Vec<(Vector3<f64>, f64)> = entries
         .par_iter()
         .map(|q| {
@@ -54,7 +59,12 @@ pub fn normals_and_spacing(points: &[Point3<f64>]) -> Result<(Vec<Vector3<f64>>,
         let mid = sp.len() / 2;
         *sp.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1
     };
-    Ok((per_point.into_iter().map(|p| p.0).collect(), spacing))
+    let normals = if want_normals {
+        per_point.into_iter().map(|p| p.0).collect()
+    } else {
+        Vec::new()
+    };
+    Ok((normals, spacing))
 }
 
 /// Normal of the least-squares plane through `pts` (zero when fewer than 3 or degenerate).
@@ -99,14 +109,16 @@ mod tests {
                 ));
             }
         }
-        let (n, s) = normals_and_spacing(&pts).unwrap();
+        let (n, s) = normals_and_spacing(&pts, true).unwrap();
+        let (none, s2) = normals_and_spacing(&pts, false).unwrap();
+        assert!(none.is_empty() && s2 == s);
         let expect = Vector3::new(-0.3, 0.0, 1.0).normalize();
         assert!(n.iter().all(|v| v.dot(&expect).abs() > 0.999));
         // The fourth neighbour on a grid of step 0.1 is an edge neighbour (0.104 across the slope).
         assert!(s > 0.1 && s < 0.16, "{s}");
         let one = [Point3::origin()];
-        let (n, s) = normals_and_spacing(&one).unwrap();
+        let (n, s) = normals_and_spacing(&one, true).unwrap();
         assert_eq!((n[0], s), (Vector3::zeros(), 0.0));
-        assert!(normals_and_spacing(&[]).is_err());
+        assert!(normals_and_spacing(&[], true).is_err());
     }
 }

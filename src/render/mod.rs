@@ -123,6 +123,15 @@ impl RenderOptions {
         if !(self.line_width.is_finite() && self.line_width > 0.0) {
             return Err(Error::InvalidOption("line width must be positive".into()));
         }
+        let samples = (self.width as u64 * self.supersample as u64)
+            * (self.height as u64 * self.supersample as u64);
+        if samples > 1 << 27 {
+            return Err(Error::InvalidOption(format!(
+                "{}x{} pixels with {}x{} supersampling needs too much memory; \
+                 lower the size or the supersampling",
+                self.width, self.height, self.supersample, self.supersample
+            )));
+        }
         if let Some(r) = self.point_radius {
             if !(r.is_finite() && r > 0.0) {
                 return Err(Error::InvalidOption("point radius must be positive".into()));
@@ -217,7 +226,7 @@ pub fn render_mesh(
     let shaded = if mesh.faces.is_empty() {
         let need_normals = !valid_normals(mesh);
         let (est, spacing) = if need_normals || opts.point_radius.is_none() {
-            cloud::normals_and_spacing(&mesh.positions)?
+            cloud::normals_and_spacing(&mesh.positions, need_normals)?
         } else {
             (Vec::new(), 0.0)
         };

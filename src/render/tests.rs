@@ -1,6 +1,7 @@
 //! End-to-end checks of `render_mesh` on the spot fixture and analytic shapes.
 
 use super::*;
+use nalgebra::Vector3;
 use std::path::Path;
 
 fn spot() -> Mesh {
@@ -198,6 +199,39 @@ fn inside_of_an_open_bowl_shows_the_back_colour() {
     };
     assert!(warm(&dome) < 0.05, "outside of the dome: {}", warm(&dome));
     assert!(warm(&bowl) > 0.5, "inside of the bowl: {}", warm(&bowl));
+}
+
+#[test]
+fn cloud_normals_are_used_when_given() {
+    // A flat square cloud: with normals facing the viewer it is lit evenly; with normals
+    // pointing sideways it is darker.
+    let pts: Vec<Point3<f64>> = (0..40)
+        .flat_map(|i| (0..40).map(move |j| Point3::new(i as f64 * 0.025, j as f64 * 0.025, 0.0)))
+        .collect();
+    let o = RenderOptions {
+        view: View::Front,
+        outline: false,
+        ..small()
+    };
+    let mean = |m: &Mesh| {
+        let img = render_mesh(m, None, &[], &o).unwrap();
+        let fg: Vec<u32> = img
+            .pixels
+            .iter()
+            .filter(|p| **p != o.background)
+            .map(|p| p[0] as u32)
+            .collect();
+        fg.iter().sum::<u32>() as f64 / fg.len() as f64
+    };
+    let facing = Mesh::from_points(pts.clone(), Some(vec![Vector3::z(); pts.len()]));
+    let sideways = Mesh::from_points(pts.clone(), Some(vec![Vector3::x(); pts.len()]));
+    let estimated = Mesh::from_points(pts, None);
+    let (a, b, c) = (mean(&facing), mean(&sideways), mean(&estimated));
+    assert!(a > b + 30.0, "{a} vs {b}");
+    assert!(
+        (a - c).abs() < 2.0,
+        "estimated normals of a plane face the viewer: {a} vs {c}"
+    );
 }
 
 #[test]
