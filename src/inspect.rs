@@ -37,6 +37,8 @@ pub struct Inspection {
     pub mean_edge_length: f64,
     /// Euler characteristic V - E + F over referenced vertices (meshes only).
     pub euler_characteristic: Option<i64>,
+    /// Scans in a scanner file (E57 point clouds; 1 for LAS/LAZ); `None` for other formats.
+    pub scans: Option<usize>,
     pub verdict: String,
 }
 
@@ -65,6 +67,7 @@ pub fn inspect(file: &str, mesh: &Mesh) -> Inspection {
             bbox_diagonal: diag,
             mean_edge_length: 0.0,
             euler_characteristic: None,
+            scans: None,
             verdict: format!(
                 "point cloud: {} points{}",
                 mesh.positions.len(),
@@ -150,6 +153,7 @@ pub fn inspect(file: &str, mesh: &Mesh) -> Inspection {
         bbox_diagonal: diag,
         mean_edge_length: mesh.mean_edge_length(),
         euler_characteristic: Some(euler),
+        scans: None,
         verdict: parts.join("; "),
     }
 }
@@ -160,6 +164,9 @@ impl Inspection {
         use std::fmt::Write;
         let mut s = String::new();
         let _ = writeln!(s, "{}: {}", self.file, self.verdict);
+        if let Some(n) = self.scans {
+            let _ = writeln!(s, "  scans: {n}");
+        }
         let _ = writeln!(
             s,
             "  vertices: {} ({} referenced, {} unreferenced, {} duplicate positions)",

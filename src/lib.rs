@@ -14,6 +14,7 @@ pub mod io;
 pub mod mesh;
 pub mod nurbs;
 pub mod quality;
+pub mod render;
 pub mod smooth;
 
 pub use error::{Error, Result};

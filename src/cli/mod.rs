@@ -3,6 +3,7 @@
 
 mod inspect;
 pub mod progress;
+mod render;
 mod smooth;
 
 use clap::{Parser, Subcommand};
@@ -30,6 +31,12 @@ pub enum Command {
         after_help = "Examples:\n  scansurf smooth noisy.ply -o smooth.ply\n  scansurf smooth scan.obj -o out.obj --method arc --iterations 20 --report smooth.json\n  scansurf smooth filled.ply -o out.ply --only-region 69451 --rings 3"
     )]
     Smooth(smooth::Args),
+    /// Draw a mesh or point cloud to a PNG (software renderer, no GPU), optionally coloured by
+    /// the distance to a reference cloud.
+    #[command(
+        after_help = "Examples:\n  scansurf render bunny.obj -o bunny.png\n  scansurf render scan.ply -o scan.png --view front --size 800x600\n  scansurf render recon.ply -o dev.png --against scan.xyz"
+    )]
+    Render(render::Args),
 }
 
 /// Runs the command line; returns the process exit code.
@@ -44,6 +51,7 @@ pub fn run() -> i32 {
     let result = match cli.command {
         Command::Inspect(a) => inspect::run(a, cli.quiet),
         Command::Smooth(a) => smooth::run(a, cli.quiet),
+        Command::Render(a) => render::run(a, cli.quiet),
     };
     match result {
         Ok(()) => 0,

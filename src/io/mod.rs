@@ -7,6 +7,8 @@
 //! directory, renamed over the target only when complete.
 
 pub mod atomic;
+pub mod e57;
+pub mod las;
 pub mod obj;
 pub mod ply;
 pub mod stl;
@@ -27,6 +29,10 @@ pub enum Format {
     Stl,
     /// Whitespace- or comma-separated points `x y z [nx ny nz]`: `.xyz`, `.txt`, `.pts`, `.csv`.
     Xyz,
+    /// E57 scanner files (read only): all scans merged, poses applied.
+    E57,
+    /// ASPRS LAS and LASzip LAZ (read only).
+    Las,
 }
 
 impl Format {
@@ -42,14 +48,16 @@ impl Format {
             "obj" => Ok(Format::Obj),
             "stl" => Ok(Format::Stl),
             "xyz" | "txt" | "pts" | "csv" | "asc" => Ok(Format::Xyz),
+            "e57" => Ok(Format::E57),
+            "las" | "laz" => Ok(Format::Las),
             "" => Err(Error::unsupported(
                 path,
-                "no file extension; expected .ply, .obj, .stl, .xyz, .txt, .pts or .csv",
+                "no file extension; expected .ply, .obj, .stl, .xyz, .txt, .pts, .csv, .e57, .las or .laz",
             )),
             other => Err(Error::unsupported(
                 path,
                 format!(
-                    "unknown extension '.{other}'; expected .ply, .obj, .stl, .xyz, .txt, .pts or .csv"
+                    "unknown extension '.{other}'; expected .ply, .obj, .stl, .xyz, .txt, .pts, .csv, .e57, .las or .laz"
                 ),
             )),
         }
@@ -76,6 +84,48 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// Fails unless `path` is a non-empty regular file (for readers that stream).
+pub(crate) fn check_nonempty_file(path: &Path) -> Result<()> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if meta.is_dir() {
+        return Err(Error::content(path, "is a directory, not a file"));
+    }
+    if meta.len() == 0 {
+        return Err(Error::content(path, "file is empty"));
+    }
+    Ok(())
+}
+
+/// Scanner-file facts that a plain point list lacks, for `inspect`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ScanInfo {
+    /// Number of scans (E57 point clouds; 1 for LAS/LAZ).
+    pub scans: usize,
+    /// Points the file declares (E57 counts invalid ones too).
+    pub declared_points: u64,
+}
+
+/// Scan count and declared points of an E57 or LAS/LAZ file; `None` for other formats.
+pub fn scan_info(path: &Path) -> Result<Option<ScanInfo>> {
+    match Format::from_path(path)? {
+        Format::E57 => {
+            let i = e57::info(path)?;
+            Ok(Some(ScanInfo {
+                scans: i.scans,
+                declared_points: i.points,
+            }))
+        }
+        Format::Las => {
+            let i = las::info(path)?;
+            Ok(Some(ScanInfo {
+                scans: 1,
+                declared_points: i.points,
+            }))
+        }
+        _ => Ok(None),
+    }
+}
+
 /// Reads a mesh or point cloud, choosing the reader by extension.
 pub fn read_mesh(path: &Path) -> Result<Mesh> {
     // Existence and kind first, so a missing file or a directory is named as such.
@@ -84,12 +134,19 @@ pub fn read_mesh(path: &Path) -> Result<Mesh> {
         return Err(Error::content(path, "is a directory, not a file"));
     }
     let format = Format::from_path(path)?;
-    let bytes = read_bytes(path)?;
     let mesh = match format {
-        Format::Ply => ply::parse(path, &bytes)?,
-        Format::Obj => obj::parse(path, &bytes)?,
-        Format::Stl => stl::parse(path, &bytes)?,
-        Format::Xyz => xyz::parse(path, &bytes)?,
+        // Scanner files can be gigabytes: their readers stream from the file.
+        Format::E57 => e57::read(path)?,
+        Format::Las => las::read(path)?,
+        _ => {
+            let bytes = read_bytes(path)?;
+            match format {
+                Format::Ply => ply::parse(path, &bytes)?,
+                Format::Obj => obj::parse(path, &bytes)?,
+                Format::Stl => stl::parse(path, &bytes)?,
+                _ => xyz::parse(path, &bytes)?,
+            }
+        }
     };
     validate(path, &mesh)?;
     Ok(mesh)
@@ -98,6 +155,12 @@ pub fn read_mesh(path: &Path) -> Result<Mesh> {
 /// Writes a mesh or point cloud in the format the extension names, atomically.
 pub fn write_mesh(path: &Path, mesh: &Mesh, options: WriteOptions) -> Result<()> {
     let format = Format::from_path(path)?;
+    if matches!(format, Format::E57 | Format::Las) {
+        return Err(Error::unsupported(
+            path,
+            "scansurf reads E57 and LAS/LAZ but does not write them; write .ply or .xyz",
+        ));
+    }
     if format == Format::Stl && mesh.faces.is_empty() {
         return Err(Error::unsupported(
             path,
@@ -108,7 +171,7 @@ pub fn write_mesh(path: &Path, mesh: &Mesh, options: WriteOptions) -> Result<()>
         Format::Ply => ply::write(w, mesh, options.ascii),
         Format::Obj => obj::write(w, mesh),
         Format::Stl => stl::write(w, mesh, options.ascii),
-        Format::Xyz => xyz::write(w, mesh),
+        _ => xyz::write(w, mesh),
     })
 }
 

@@ -6,6 +6,7 @@
 
 pub mod adjacency;
 pub mod normals;
+pub mod subsample;
 pub mod topology;
 
 pub use topology::{BoundaryLoop, Topology};

@@ -1,0 +1,109 @@
+//! `scansurf render INPUT -o OUT.png [--against CLOUD] [--view iso|front|top|side] [--size WxH]`.
+
+use crate::error::{Error, Result};
+use crate::render::{self, ColorScale, RenderOptions, UpAxis, View};
+use std::path::PathBuf;
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Mesh or point cloud to draw (.ply .obj .stl .xyz .e57 .las .laz ...).
+    pub input: PathBuf,
+    /// PNG to write.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Colour the input's vertices by their distance to the nearest point of this cloud, with a
+    /// legend in model units.
+    #[arg(long, value_name = "CLOUD")]
+    pub against: Option<PathBuf>,
+    /// iso, front, top or side.
+    #[arg(long, default_value = "iso")]
+    pub view: String,
+    /// Model axis pointing up in the picture: y (scans, default) or z (CAD).
+    #[arg(long, default_value = "y")]
+    pub up: String,
+    /// Picture size WxH in pixels.
+    #[arg(long, default_value = "1600x1200")]
+    pub size: String,
+    /// Subsample point clouds above this many points (voxel grid) before drawing.
+    #[arg(long)]
+    pub max_points: Option<usize>,
+}
+
+pub fn run(a: Args, quiet: bool) -> Result<()> {
+    let ext = a
+        .output
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    if ext.as_deref() != Some("png") {
+        return Err(Error::unsupported(
+            &a.output,
+            "render writes PNG: name the output .png",
+        ));
+    }
+    let (width, height) = render::parse_size(&a.size)?;
+    let view: View = a.view.parse()?;
+    let up: UpAxis = a.up.parse()?;
+    let mut mesh = crate::io::read_mesh(&a.input)?;
+    if let Some(max) = a.max_points {
+        mesh = crate::mesh::subsample::limit_points(mesh, max)?;
+    }
+    let opts = RenderOptions {
+        width,
+        height,
+        view,
+        up,
+        ..RenderOptions::default()
+    };
+    let spinner = super::progress::spinner("rendering", quiet);
+    let scalars = match &a.against {
+        None => None,
+        Some(c) => {
+            let cloud = crate::io::read_mesh(c)?;
+            let d = nearest_distances(&mesh, &cloud.positions)
+                .map_err(|e| Error::content(c, e.to_string()))?;
+            Some(d)
+        }
+    };
+    let img = match &scalars {
+        Some(d) => {
+            let scale = ColorScale::auto(d)?;
+            render::render_mesh(&mesh, Some((d, scale)), &[], &opts)?
+        }
+        None => render::render_mesh(&mesh, None, &[], &opts)?,
+    };
+    img.save_png(&a.output)?;
+    spinner.finish_and_clear();
+    if !quiet {
+        eprintln!(
+            "rendered {} ({} view, {}x{}) -> {}",
+            a.input.display(),
+            a.view,
+            width,
+            height,
+            a.output.display()
+        );
+    }
+    Ok(())
+}
+
+/// Distance from every vertex of `mesh` to the nearest point of `cloud`.
+fn nearest_distances(mesh: &crate::Mesh, cloud: &[nalgebra::Point3<f64>]) -> Result<Vec<f64>> {
+    use kiddo::{ImmutableKdTree, SquaredEuclidean};
+    use rayon::prelude::*;
+    let pts: Vec<[f64; 3]> = cloud.iter().map(|p| [p.x, p.y, p.z]).collect();
+    let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&pts)
+        .map_err(|e| Error::Degenerate(format!("cannot index the cloud: {e:?}")))?;
+    Ok(mesh
+        .positions
+        .par_iter()
+        .map(|p| {
+            tree.query(&[p.x, p.y, p.z])
+                .nearest_one::<SquaredEuclidean<f64>>()
+                .execute()
+                .distance
+                .max(0.0)
+                .sqrt()
+        })
+        .collect())
+}
