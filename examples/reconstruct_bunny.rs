@@ -4,7 +4,7 @@
 //! cargo run --release --example reconstruct_bunny [-- PATH.obj [--cloud]]
 
 use nalgebra::Point3;
-use scansurf::implicit::{FitOptions, Implicit, PouImplicit};
+use scansurf::reconstruct::{reconstruct, ReconstructOptions};
 use scansurf::Mesh;
 use std::time::Instant;
 
@@ -33,52 +33,72 @@ fn read_obj(path: &str) -> Mesh {
     m
 }
 
-fn percentile(v: &mut [f64], q: f64) -> f64 {
-    v.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    v[((v.len() - 1) as f64 * q).round() as usize]
-}
-
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let path = args
-        .get(1)
+        .iter()
+        .skip(1)
+        .find(|a| !a.starts_with("--"))
         .cloned()
         .unwrap_or_else(|| "/work/shared/data/stanford-bunny.obj".into());
-    let mesh = read_obj(&path);
+    let cloud = args.iter().any(|a| a == "--cloud");
+    let mut mesh = read_obj(&path);
+    if cloud {
+        let (p, _) = mesh.referenced_points();
+        mesh = Mesh::from_points(p, None);
+    }
+    let mut opts = ReconstructOptions::default();
+    let env = |k: &str| std::env::var(k).ok().map(|v| v.parse::<f64>().expect(k));
+    if let Some(v) = env("TOL") {
+        opts.fit.tolerance = v;
+    }
+    if let Some(v) = env("OVERLAP") {
+        opts.fit.overlap = v;
+    }
+    if let Some(v) = env("MAXPTS") {
+        opts.fit.max_points = v as usize;
+    }
+    if let Some(v) = env("RES") {
+        opts.resolution = v;
+    }
+    if let Some(v) = env("MESHTOL") {
+        opts.tolerance = v;
+    }
+    if let Some(v) = env("SUBDIV") {
+        opts.max_subdivisions = v as usize;
+    }
+    if let Some(v) = env("RELAX") {
+        opts.relax_iterations = v as usize;
+    }
     let t0 = Instant::now();
-    let normals = scansurf::mesh::normals::vertex_normals(&mesh);
-    let used = mesh.referenced();
-    let (pts, nrm): (Vec<_>, Vec<_>) = mesh
-        .positions
-        .iter()
-        .zip(&normals)
-        .zip(&used)
-        .filter(|(_, &u)| u)
-        .map(|((p, n), _)| (*p, *n))
-        .unzip();
-    let mut opts = FitOptions::default();
-    if let Ok(v) = std::env::var("TOL") {
-        opts.tolerance = v.parse().unwrap();
+    let (out, report) = reconstruct(&mesh, &opts, &mut |_, _| {}).expect("reconstruct");
+    let secs = t0.elapsed().as_secs_f64();
+    println!("{}", serde_json::to_string_pretty(&report).unwrap());
+    if let Some(d) = report.deviation {
+        println!(
+            "bunny: {} -> {} faces, closed manifold {}, euler {}, deviation/diag mean {:.3e} p99 {:.3e} max {:.3e}, {:.2} s",
+            report.input_points,
+            report.faces,
+            report.closed_manifold,
+            report.euler_characteristic,
+            d.relative.mean,
+            d.relative.p99,
+            d.relative.max,
+            secs
+        );
     }
-    if let Ok(v) = std::env::var("OVERLAP") {
-        opts.overlap = v.parse().unwrap();
+    if let Ok(o) = std::env::var("OUT") {
+        write_obj(&o, &out);
     }
-    if let Ok(v) = std::env::var("MAXPTS") {
-        opts.max_points = v.parse().unwrap();
+}
+
+fn write_obj(path: &str, m: &Mesh) {
+    use std::io::Write;
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path).expect("create"));
+    for p in &m.positions {
+        writeln!(w, "v {} {} {}", p.x, p.y, p.z).unwrap();
     }
-    let f = PouImplicit::fit(&pts, &nrm, &opts).expect("fit");
-    let t_fit = t0.elapsed().as_secs_f64();
-    println!("points {} fit {:.2} s", pts.len(), t_fit);
-    println!("{:#?}", f.stats());
-    let d = f.diagonal();
-    let t1 = Instant::now();
-    let mut r: Vec<f64> = pts.iter().map(|p| f.value(p).abs() / d).collect();
-    let t_eval = t1.elapsed().as_secs_f64();
-    let mean = r.iter().sum::<f64>() / r.len() as f64;
-    let p99 = percentile(&mut r, 0.99);
-    let max = percentile(&mut r, 1.0);
-    println!(
-        "|F| at points / diag: mean {mean:.3e} p99 {p99:.3e} max {max:.3e}  ({} evals in {t_eval:.3} s)",
-        r.len()
-    );
+    for f in &m.faces {
+        writeln!(w, "f {} {} {}", f[0] + 1, f[1] + 1, f[2] + 1).unwrap();
+    }
 }

@@ -9,7 +9,10 @@ pub mod cli;
 pub mod error;
 pub mod implicit;
 pub mod mesh;
+pub mod metrics;
+pub mod normals;
 pub mod polygonize;
+pub mod reconstruct;
 pub mod spatial;
 
 pub use error::{Error, Result};

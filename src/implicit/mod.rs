@@ -31,6 +31,7 @@ pub trait Implicit: Sync {
 pub mod local;
 pub mod poly;
 pub mod pou;
+pub mod project;
 pub mod rbf;
 
 pub use pou::{FitOptions, FitStats, PouImplicit};

@@ -102,6 +102,8 @@ pub struct FitStats {
     pub cubic: usize,
     pub rbf: usize,
     pub constant: usize,
+    /// Cells without points in their support (holes, empty space), counted in the kinds above.
+    pub extrapolating: usize,
     /// Cells whose function misses the tolerance (too few points to split further).
     pub over_tolerance: usize,
     pub max_depth: u32,
@@ -216,7 +218,9 @@ impl PouImplicit {
                 LocalKind::Rbf => stats.rbf += 1,
                 LocalKind::Constant => stats.constant += 1,
             }
-            if cell.priority == 1.0 {
+            if cell.priority < 1.0 {
+                stats.extrapolating += 1;
+            } else {
                 if !cell.meets_tolerance {
                     stats.over_tolerance += 1;
                 }
@@ -259,6 +263,21 @@ impl PouImplicit {
     /// The domains (for inspection and tests).
     pub fn cells(&self) -> &[Cell] {
         self.tree.payloads()
+    }
+
+    /// The cells whose support holds `x`, with their blending weight (seed 003 eq. 7, times the
+    /// cell's priority) and value at `x` (for inspection and tests).
+    pub fn contributions(&self, x: &Point3<f64>) -> Vec<(usize, f64, f64)> {
+        let cells = self.tree.payloads();
+        let mut out = Vec::new();
+        self.tree.for_each_support(x, |l| {
+            let c = &cells[l];
+            let t = (x - c.center).component_div(&c.half);
+            let prod: f64 = (0..3).map(|k| (1.0 - t[k] * t[k]).max(0.0)).product();
+            let w = weight(1.0 - prod).0 * c.priority;
+            out.push((l, w, c.function.value(x)));
+        });
+        out
     }
 
     /// Signed distance to the nearest point (sign from its normal): F outside all supports.
@@ -403,7 +422,8 @@ impl Builder<'_> {
             return false;
         };
         let fr = &hp.frame;
-        let gap = 0.25 * cube.size;
+        // Natural gaps between samples are up to about the sampling radius.
+        let gap = (0.25 * cube.size).max(self.sampling_radius(&cube.center()));
         let half = 0.5 * cube.size * 3f64.sqrt() / fr.scale;
         let c = fr.local(&cube.center());
         const N: usize = 6;
@@ -418,6 +438,85 @@ impl Builder<'_> {
             }
         }
         false
+    }
+
+    /// An empty cell that the surface passes by rather than through (no tangent plane of the
+    /// nearest points cuts its box) only needs a rough signed distance: a quadratic fitted to
+    /// the nearest points, or the tangent plane of the nearest one. `None` for a possible hole.
+    fn side_cell(&self, c: &Point3<f64>, h0: f64) -> Option<Decision<Cell>> {
+        let o = self.opts;
+        let near = self.kd.knn(c, o.min_points);
+        let reach = h0 * 3f64.sqrt();
+        if near
+            .iter()
+            .any(|&(i, _)| (c - self.pts[i]).dot(&self.nrm[i]).abs() <= reach)
+        {
+            return None;
+        }
+        let p: Vec<Point3<f64>> = near.iter().map(|&(i, _)| self.pts[i]).collect();
+        let n: Vec<Vector3<f64>> = near.iter().map(|&(i, _)| self.nrm[i]).collect();
+        let scale = near.last().map_or(h0, |x| x.1).max(1e-300);
+        let quad = super::poly::Frame::from_normals(&p, &n, scale, o.min_normal_cos)
+            .and_then(|fr| local::fit_poly(&p, &n, fr, Degree::Quadratic))
+            .filter(|f| f.normal_agreement >= 0.9);
+        let fit = match quad {
+            Some(f) => f,
+            None => {
+                let (i, _) = near[0];
+                let frame = super::poly::Frame::new(self.pts[i], self.nrm[i], scale)?;
+                local::assess(
+                    LocalFunction::Poly(super::poly::HeightPoly {
+                        frame,
+                        degree: Degree::Linear,
+                        coef: [0.0; 10],
+                    }),
+                    &p,
+                    &n,
+                )
+            }
+        };
+        Some(self.leaf_with(*c, h0, p.len(), fit, EXTRAPOLATION_PRIORITY))
+    }
+
+    /// A thin-plate RBF through the points (an evenly strided subset of at most
+    /// `rbf_max_points` of them), assessed at all of them.
+    fn rbf(&self, p: &[Point3<f64>], n: &[Vector3<f64>], params: &LocalParams) -> Option<LocalFit> {
+        let m = self.opts.rbf_max_points;
+        let fit = if p.len() > m {
+            let step = p.len() as f64 / m as f64;
+            let sel: Vec<usize> = (0..m).map(|k| (k as f64 * step) as usize).collect();
+            let sp: Vec<Point3<f64>> = sel.iter().map(|&i| p[i]).collect();
+            let sn: Vec<Vector3<f64>> = sel.iter().map(|&i| n[i]).collect();
+            local::fit_rbf(&sp, &sn, params)?
+        } else {
+            local::fit_rbf(p, n, params)?
+        };
+        Some(local::assess(fit.function, p, n))
+    }
+
+    /// True when the points `idx`, seen in the plane across their mean normal, lie all around
+    /// `c` (no empty angular sector wider than 120 degrees).
+    fn surrounds(&self, idx: &[usize], c: &Point3<f64>) -> bool {
+        let mean: Vector3<f64> = idx.iter().map(|&i| self.nrm[i]).sum();
+        let Some(frame) = super::poly::Frame::new(*c, mean, 1.0) else {
+            return false;
+        };
+        let mut ang: Vec<f64> = idx
+            .iter()
+            .map(|&i| {
+                let l = frame.local(&self.pts[i]);
+                l.y.atan2(l.x)
+            })
+            .collect();
+        if ang.len() < 3 {
+            return false;
+        }
+        ang.sort_by(f64::total_cmp);
+        let mut gap = ang[0] + std::f64::consts::TAU - ang[ang.len() - 1];
+        for w in ang.windows(2) {
+            gap = gap.max(w[1] - w[0]);
+        }
+        gap < 2.0 * std::f64::consts::FRAC_PI_3
     }
 
     /// Radius around the point nearest to `c` holding `min_points` points: the smallest useful
@@ -478,11 +577,31 @@ impl Builder<'_> {
             return self.constant(c, h0, 0);
         }
         if empty {
-            // A hole (or the space beside the surface): widen the fit set so that it reaches
-            // around the hole rather than only to its nearest edge.
-            while idx.len() < 3 * o.min_points && h < limit {
+            if let Some(side) = self.side_cell(&c, h0) {
+                return side;
+            }
+        }
+        if empty {
+            // A hole (or the space beside the surface): widen the fit set until it surrounds the
+            // cell, reaching across the hole rather than only to its nearest edge. Only points
+            // facing like the nearest ones count (the rim of a hole in a flat base, not the
+            // walls rising beside it).
+            let nref: Vector3<f64> = self
+                .kd
+                .knn(&c, o.min_points)
+                .iter()
+                .map(|&(i, _)| self.nrm[i])
+                .sum();
+            let nref = nref.try_normalize(1e-12).unwrap_or_else(Vector3::zeros);
+            let facing = |idx: Vec<usize>| -> Vec<usize> {
+                idx.into_iter()
+                    .filter(|&i| self.nrm[i].dot(&nref) > 0.5)
+                    .collect()
+            };
+            idx = facing(idx);
+            while (idx.len() < 3 * o.min_points || !self.surrounds(&idx, &c)) && h < limit {
                 h *= 1.25;
-                idx = self.in_box(&c, h);
+                idx = facing(self.in_box(&c, h));
             }
         }
         let p: Vec<Point3<f64>> = idx.iter().map(|&i| self.pts[i]).collect();
@@ -507,10 +626,7 @@ impl Builder<'_> {
                     if empty {
                         return self.leaf_with(c, h0, p.len(), f.clone(), EXTRAPOLATION_PRIORITY);
                     }
-                    if ctx.can_split
-                        && idx0.len() > o.min_points
-                        && self.has_gap(&ctx.cube, &f.function)
-                    {
+                    if ctx.can_split && self.has_gap(&ctx.cube, &f.function) {
                         // The points cover only part of the cell: extrapolating over the rest
                         // (a hole) is better done by smaller cells with wider fits.
                         return Decision::Split;
@@ -522,12 +638,20 @@ impl Builder<'_> {
         }
         if empty {
             // An empty cell next to the points (a hole, or the space beside the surface): its
-            // function only extrapolates, so a looser fit is fine; a bad one becomes a constant.
-            if p.len() <= o.rbf_max_points {
-                best = local::better(best, local::fit_rbf(&p, &n, &params), self.tol);
+            // function only extrapolates, so a looser fit is fine. Where no height function fits
+            // (the hole's rim bends), a thin-plate RBF through the rim bridges it as in seed 003;
+            // a bad fit becomes a constant.
+            // A cheap polynomial within the loose tolerance is enough; the RBF only where the
+            // polynomials are far off.
+            if !best
+                .as_ref()
+                .is_some_and(|f| f.max_residual <= tol && f.normal_agreement >= 0.9)
+            {
+                best = local::better(best, self.rbf(&p, &n, &params), tol);
             }
+            // Any sensible bridge beats a constant, whose jumps to its neighbours are walls.
             return match best {
-                Some(f) if f.max_residual <= tol && f.normal_agreement >= 0.95 => {
+                Some(f) if f.max_residual <= tol.max(0.25 * h) && f.normal_agreement >= 0.9 => {
                     self.leaf_with(c, h0, p.len(), f, EXTRAPOLATION_PRIORITY)
                 }
                 _ => self.constant(c, h0, 0),
@@ -541,24 +665,7 @@ impl Builder<'_> {
             return Decision::Split;
         }
         // Too small to split: an RBF through the (sub-sampled) support.
-        let (rp, rn) = if p.len() > o.rbf_max_points {
-            let step = p.len() as f64 / o.rbf_max_points as f64;
-            let sel: Vec<usize> = (0..o.rbf_max_points)
-                .map(|k| (k as f64 * step) as usize)
-                .collect();
-            (
-                sel.iter().map(|&i| p[i]).collect::<Vec<_>>(),
-                sel.iter().map(|&i| n[i]).collect::<Vec<_>>(),
-            )
-        } else {
-            (p.clone(), n.clone())
-        };
-        if rp.len() >= 4 {
-            if let Some(r) = local::fit_rbf(&rp, &rn, &params) {
-                let r = local::assess(r.function, &p, &n);
-                best = local::better(best, Some(r), self.tol);
-            }
-        }
+        best = local::better(best, self.rbf(&p, &n, &params), self.tol);
         if best.is_none() {
             // Last resort: a plane-like height function along the mean normal.
             let mean: Vector3<f64> = n.iter().sum();

@@ -2,5 +2,9 @@
 //! relaxation with re-projection (eq. 9), and 1-to-4 subdivision with projection.
 
 pub mod marching_cubes;
+pub mod relax;
+pub mod subdivide;
 
 pub use marching_cubes::marching_cubes;
+pub use relax::relax;
+pub use subdivide::{refine, RefineOptions, RefineReport};

@@ -3,6 +3,8 @@
 
 pub mod kdtree;
 pub mod octree;
+pub mod triangle_bvh;
 
 pub use kdtree::KdTree;
 pub use octree::{CellContext, Cube, Decision, Octree};
+pub use triangle_bvh::TriangleBvh;
