@@ -181,7 +181,7 @@ mod tests {
             Point3::new(0.0, 0.0, 0.0),
             Point3::new(1.0, 0.0, 0.01),
             Point3::new(0.0, 1.0, -0.01),
-            Point3::new(1.0, 1.0, 0.0),
+            Point3::new(1.0, 1.0, 0.01),
             Point3::new(0.5, 0.5, 0.0),
         ];
         let up = vec![Vector3::z(); 5];
