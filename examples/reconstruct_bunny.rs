@@ -62,7 +62,7 @@ fn main() {
         opts.resolution = v;
     }
     if let Some(v) = env("MESHTOL") {
-        opts.tolerance = v;
+        opts.tolerance = Some(v);
     }
     if let Some(v) = env("SUBDIV") {
         opts.max_subdivisions = v as usize;

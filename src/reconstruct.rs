@@ -12,6 +12,7 @@ use crate::implicit::{FitOptions, FitStats, PouImplicit};
 use crate::mesh::{Mesh, Topology};
 use crate::metrics::{deviation, Deviation};
 use crate::normals::{oriented_points, NormalSource};
+use crate::polygonize::components::keep_supported_components;
 use crate::polygonize::{marching_cubes, refine, relax, RefineOptions, RefineReport};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -28,9 +29,10 @@ pub struct ReconstructOptions {
     pub cell_size: Option<f64>,
     /// Relaxation rounds after marching cubes (default 2).
     pub relax_iterations: usize,
-    /// Largest gap between the mesh and the implicit at triangle centroids and edge midpoints,
-    /// as a fraction of the bounding-box diagonal (default 1e-4).
-    pub tolerance: f64,
+    /// Largest gap between the mesh and the implicit at triangle centroids and edge midpoints
+    /// (99th percentile over the triangles), as a fraction of the bounding-box diagonal; `None`
+    /// (the default) means three times the fit tolerance.
+    pub tolerance: Option<f64>,
     /// At most this many 1-to-4 subdivisions (default 2).
     pub max_subdivisions: usize,
     /// Neighbours for normal estimation and repair (default 12).
@@ -46,7 +48,7 @@ impl Default for ReconstructOptions {
             resolution: 1.0,
             cell_size: None,
             relax_iterations: 2,
-            tolerance: 1e-4,
+            tolerance: None,
             max_subdivisions: 2,
             normal_neighbours: 12,
             measure_deviation: true,
@@ -79,6 +81,8 @@ pub struct ReconstructReport {
     pub cell_size: f64,
     pub marching_cubes_vertices: usize,
     pub marching_cubes_faces: usize,
+    /// Components of the marching-cubes mesh dropped as unsupported by the data.
+    pub removed_components: usize,
     pub relax_failures: usize,
     pub refine: RefineReport,
     pub vertices: usize,
@@ -112,7 +116,8 @@ pub fn reconstruct(
     if !(opts.resolution > 0.0 && opts.resolution.is_finite()) {
         return Err(Error::InvalidOption("resolution must be positive".into()));
     }
-    if !(opts.tolerance > 0.0 && opts.tolerance.is_finite()) {
+    let mesh_tol = opts.tolerance.unwrap_or(3.0 * opts.fit.tolerance);
+    if !(mesh_tol > 0.0 && mesh_tol.is_finite()) {
         return Err(Error::InvalidOption("tolerance must be positive".into()));
     }
     let t_all = Instant::now();
@@ -141,12 +146,15 @@ pub fn reconstruct(
         min: root.min,
         max: root.max(),
     };
-    let mut mesh = marching_cubes(&f, f.points().0, &dom, cell)?;
+    let mesh = marching_cubes(&f, f.points().0, &dom, cell)?;
     if mesh.faces.is_empty() {
         return Err(Error::Degenerate(
             "the implicit surface has no zero crossing near the points".into(),
         ));
     }
+    // Spurious sheets beside the surface are the nearest surface for no input point.
+    let min_votes = 3usize.max(op.points.len() / 10_000);
+    let (mut mesh, removed_components) = keep_supported_components(mesh, &op.points, min_votes)?;
     timings.polygonize = t.elapsed().as_secs_f64();
     let (mc_v, mc_f) = (mesh.positions.len(), mesh.faces.len());
 
@@ -159,7 +167,8 @@ pub fn reconstruct(
     progress("refine", 0.7);
     let t = Instant::now();
     let ropts = RefineOptions {
-        tolerance: opts.tolerance * diag,
+        tolerance: mesh_tol * diag,
+        quantile: 0.99,
         max_levels: opts.max_subdivisions,
         relax_iterations: 1,
     };
@@ -188,6 +197,7 @@ pub fn reconstruct(
         cell_size: cell,
         marching_cubes_vertices: mc_v,
         marching_cubes_faces: mc_f,
+        removed_components,
         relax_failures,
         refine: refine_report,
         vertices: mesh.positions.len(),

@@ -87,6 +87,8 @@ pub struct LocalFit {
     pub function: LocalFunction,
     /// Largest |f| at the support points.
     pub max_residual: f64,
+    /// Root mean square of f at the support points.
+    pub rms_residual: f64,
     /// Fraction of support points whose normal agrees with grad f (dot > 0.3 |grad f|).
     pub normal_agreement: f64,
 }
@@ -101,10 +103,12 @@ impl LocalFit {
 /// Measures a candidate at the support points.
 pub fn assess(f: LocalFunction, points: &[Point3<f64>], normals: &[Vector3<f64>]) -> LocalFit {
     let mut max_residual = 0.0f64;
+    let mut sq = 0.0f64;
     let mut agree = 0usize;
     for (p, n) in points.iter().zip(normals) {
         let (v, g) = f.value_and_gradient(p);
         max_residual = max_residual.max(v.abs());
+        sq += v * v;
         if g.dot(n) > 0.3 * g.norm() * n.norm() {
             agree += 1;
         }
@@ -115,6 +119,7 @@ pub fn assess(f: LocalFunction, points: &[Point3<f64>], normals: &[Vector3<f64>]
     LocalFit {
         function: f,
         max_residual,
+        rms_residual: (sq / points.len().max(1) as f64).sqrt(),
         normal_agreement: if points.is_empty() {
             1.0
         } else {
@@ -144,15 +149,15 @@ pub fn fit_poly(
         .map(|h| assess(LocalFunction::Poly(h), points, normals))
 }
 
-/// Fits a thin-plate RBF through the points (with off-surface constraints) and assesses it.
+/// Fits a thin-plate RBF through the points (with off-surface constraints), not yet assessed.
 pub fn fit_rbf(
     points: &[Point3<f64>],
     normals: &[Vector3<f64>],
     p: &LocalParams,
-) -> Option<LocalFit> {
+) -> Option<LocalFunction> {
     ThinPlateRbf::fit_surface(points, normals, p.rbf_eps)
         .ok()
-        .map(|r| assess(LocalFunction::Rbf(r), points, normals))
+        .map(LocalFunction::Rbf)
 }
 
 /// The better of two fits: meeting the tolerance first, then agreement, then residual.

@@ -34,7 +34,8 @@ use nalgebra::{Point3, Vector3};
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct FitOptions {
     /// Largest accepted |f| at a domain's points, as a fraction of the bounding-box diagonal
-    /// (default 1e-4). Domains that miss it are split (or, when too small, use an RBF).
+    /// (default 2e-4, about the noise of a good scan). Domains that miss it are split (or, when
+    /// too small to split, use an RBF, which interpolates).
     pub tolerance: f64,
     /// A domain whose support holds more points is split (default 120; seed 003: 30-300).
     pub max_points: usize,
@@ -55,7 +56,7 @@ pub struct FitOptions {
 impl Default for FitOptions {
     fn default() -> Self {
         FitOptions {
-            tolerance: 1e-4,
+            tolerance: 2e-4,
             max_points: 120,
             min_points: 20,
             overlap: 0.1,
@@ -104,6 +105,8 @@ pub struct FitStats {
     pub constant: usize,
     /// Cells without points in their support (holes, empty space), counted in the kinds above.
     pub extrapolating: usize,
+    /// Extrapolating cells that use an RBF (hole bridges).
+    pub extrapolating_rbf: usize,
     /// Cells whose function misses the tolerance (too few points to split further).
     pub over_tolerance: usize,
     pub max_depth: u32,
@@ -220,6 +223,9 @@ impl PouImplicit {
             }
             if cell.priority < 1.0 {
                 stats.extrapolating += 1;
+                if cell.function.kind() == LocalKind::Rbf {
+                    stats.extrapolating_rbf += 1;
+                }
             } else {
                 if !cell.meets_tolerance {
                     stats.over_tolerance += 1;
@@ -491,7 +497,7 @@ impl Builder<'_> {
         } else {
             local::fit_rbf(p, n, params)?
         };
-        Some(local::assess(fit.function, p, n))
+        Some(local::assess(fit, p, n))
     }
 
     /// True when the points `idx`, seen in the plane across their mean normal, lie all around
@@ -543,6 +549,7 @@ impl Builder<'_> {
             LocalFit {
                 function: LocalFunction::Constant(s * d),
                 max_residual: 0.0,
+                rms_residual: 0.0,
                 normal_agreement: 1.0,
             },
             EXTRAPOLATION_PRIORITY,

@@ -133,10 +133,11 @@ impl ThinPlateRbf {
         })
     }
 
-    /// Surface implicit through `points` (value 0) with off-surface constraints +eps at
-    /// `p + eps n` and -eps at `p - eps n` (seed 003 eq. 4; the offsets are shortened, down to
-    /// eps/8, while another point is nearer to the offset point than its own point, as in Carr et
-    /// al. 2001, and dropped when that does not help).
+    /// Surface implicit through `points` (value 0) with off-surface constraints (seed 003 eq. 4b):
+    /// +eps at `p + eps n` for even-numbered points and -eps at `p - eps n` for odd-numbered ones,
+    /// so both sides are held with 2n rather than 3n unknowns. An offset is shortened, down to
+    /// eps/8, while another point is nearer to the offset point than its own point (Carr et al.
+    /// 2001), and dropped when that does not help.
     pub fn fit_surface(
         points: &[Point3<f64>],
         normals: &[Vector3<f64>],
@@ -155,7 +156,10 @@ impl ThinPlateRbf {
             let Some(n) = n.try_normalize(1e-300) else {
                 continue;
             };
-            for sign in [1.0, -1.0] {
+            // One offset per point, alternately outside and inside: both sides are constrained
+            // with a system of 2n rather than 3n unknowns.
+            {
+                let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
                 let mut e = eps;
                 for _ in 0..4 {
                     let q = p + n * (sign * e);

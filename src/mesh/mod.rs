@@ -5,6 +5,7 @@
 //! memory for this tool's inputs).
 
 pub mod normals;
+pub mod retain;
 pub mod subdivide;
 pub mod topology;
 
