@@ -12,10 +12,15 @@ pub mod implicit;
 pub mod inspect;
 pub mod io;
 pub mod mesh;
+pub mod metrics;
+pub mod normals;
 pub mod nurbs;
+pub mod polygonize;
 pub mod quality;
+pub mod reconstruct;
 pub mod render;
 pub mod smooth;
+pub mod spatial;
 
 pub use error::{Error, Result};
 pub use mesh::Mesh;

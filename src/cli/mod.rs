@@ -3,6 +3,7 @@
 
 mod inspect;
 pub mod progress;
+mod reconstruct;
 mod render;
 mod smooth;
 
@@ -37,6 +38,12 @@ pub enum Command {
         after_help = "Examples:\n  scansurf render bunny.obj -o bunny.png\n  scansurf render scan.ply -o scan.png --view front --size 800x600\n  scansurf render recon.ply -o dev.png --against scan.xyz"
     )]
     Render(render::Args),
+    /// Closed, manifold triangle mesh from a point cloud or a mesh with holes (implicit surface
+    /// of seeds 003/004, marching cubes, relaxation, subdivision with projection).
+    #[command(
+        after_help = "Examples:\n  scansurf reconstruct scan.xyz -o closed.ply\n  scansurf reconstruct bunny.obj -o bunny.ply --report bunny.json"
+    )]
+    Reconstruct(reconstruct::Args),
 }
 
 /// Runs the command line; returns the process exit code.
@@ -52,6 +59,7 @@ pub fn run() -> i32 {
         Command::Inspect(a) => inspect::run(a, cli.quiet),
         Command::Smooth(a) => smooth::run(a, cli.quiet),
         Command::Render(a) => render::run(a, cli.quiet),
+        Command::Reconstruct(a) => reconstruct::run(a, cli.quiet),
     };
     match result {
         Ok(()) => 0,
@@ -73,4 +81,13 @@ pub(crate) fn write_json<T: serde::Serialize>(
         w.write_all(text.as_bytes())?;
         w.write_all(b"\n")
     })
+}
+
+/// Names the input file in an error from an algorithm that does not know it (degenerate data,
+/// numerical failure), so every message says which file it is about.
+pub(crate) fn with_input(e: crate::Error, input: &std::path::Path) -> crate::Error {
+    match e {
+        crate::Error::Degenerate(m) | crate::Error::Numerical(m) => crate::Error::content(input, m),
+        other => other,
+    }
 }

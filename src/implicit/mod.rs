@@ -27,3 +27,11 @@ pub trait Implicit: Sync {
         (self.value(x), self.gradient(x))
     }
 }
+
+pub mod local;
+pub mod poly;
+pub mod pou;
+pub mod project;
+pub mod rbf;
+
+pub use pou::{FitOptions, FitStats, PouImplicit};

@@ -6,6 +6,8 @@
 
 pub mod adjacency;
 pub mod normals;
+pub mod retain;
+pub mod subdivide;
 pub mod subsample;
 pub mod topology;
 

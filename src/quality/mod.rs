@@ -5,8 +5,6 @@
 
 pub mod continuity;
 pub mod patch_deviation;
-pub mod stats;
 
 pub use continuity::{normal_jumps, ContinuityReport};
 pub use patch_deviation::{deviation_from_patches, PatchDeviation};
-pub use stats::DistanceStats;

@@ -6,7 +6,7 @@
 //! the smallest distance wins. Candidates from the `k` nearest samples cover points near patch
 //! edges and corners, where the true foot point can lie on any of up to (valence) patches.
 
-use super::stats::DistanceStats;
+use crate::metrics::deviation::Deviation;
 use crate::nurbs::PatchNetwork;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::Point3;
@@ -23,7 +23,7 @@ const NEAREST: usize = 12;
 #[derive(Debug, Clone, Serialize)]
 pub struct PatchDeviation {
     #[serde(flatten)]
-    pub stats: DistanceStats,
+    pub stats: Deviation,
     /// Distance of each input point, in input order.
     #[serde(skip)]
     pub distances: Vec<f64>,
@@ -77,7 +77,7 @@ pub fn deviation_from_patches(
         _ => vec![f64::INFINITY; points.len()],
     };
     PatchDeviation {
-        stats: DistanceStats::of(&distances, reference),
+        stats: Deviation::from_distances(&distances, reference),
         distances,
     }
 }

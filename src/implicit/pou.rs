@@ -1,0 +1,833 @@
+//! The partition-of-unity implicit: local functions on an adaptive octree blended with the
+//! weight of seed 003 eq. 7-8.
+//!
+//! ```text
+//! t_r = (x_r - c_r) / a_r            (c: centre, a: half-widths of the support box)
+//! d(x) = 1 - prod_r (1 - t_r^2)      (eq. 7a: 4 (x_r - S_r)(T_r - x_r) / (T_r - S_r)^2 = 1 - t_r^2)
+//! W(d) = -6 d^5 + 15 d^4 - 10 d^3 + 1   (eq. 7b; 0 outside the box)
+//! F(x) = sum_i W_i(x) f_i(x) / sum_i W_i(x)   (eq. 8)
+//! ```
+//!
+//! Domains (seed 003 section 3.1, seed 004 section 2.1): the root cube around the points is split
+//! while a cell's support holds more than `max_points` points or its best local function misses
+//! the tolerance. A cell's support is the cell enlarged by `overlap` (seed 003: about 10 %), grown
+//! further while it holds fewer than `min_points` points. Each local function is fitted to *all*
+//! points inside its support, so wherever the weights are non-zero every contributing function
+//! nearly vanishes at the points, and so does the blend. Empty cells next to the points (holes)
+//! get a function fitted to the points of their grown support, which bridges the hole; empty
+//! cells far from all points get a constant signed-distance estimate so that F is defined
+//! everywhere in the root cube. Outside the root cube F is the distance to the nearest point,
+//! signed by its normal.
+//!
+//! Fitting is parallel (rayon, one octree level at a time, collected in order): the result does
+//! not depend on the thread count.
+
+use super::local::{self, LocalFit, LocalFunction, LocalKind, LocalParams};
+use super::poly::Degree;
+use super::Implicit;
+use crate::mesh::Aabb;
+use crate::spatial::{CellContext, Cube, Decision, KdTree, Octree};
+use crate::{Error, Result};
+use nalgebra::{Point3, Vector3};
+
+/// Options of [`PouImplicit::fit`], with documented defaults.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct FitOptions {
+    /// Largest accepted |f| at a domain's points, as a fraction of the bounding-box diagonal
+    /// (default 2e-4, about the noise of a good scan). Domains that miss it are split (or, when
+    /// too small to split, use an RBF, which interpolates).
+    pub tolerance: f64,
+    /// A domain whose support holds more points is split (default 120; seed 003: 30-300).
+    pub max_points: usize,
+    /// A support with fewer points is grown (default 20).
+    pub min_points: usize,
+    /// Support = cell enlarged by this fraction of its edge (default 0.1, seed 003).
+    pub overlap: f64,
+    /// Largest growth of a support's half-width over the cell's, for sparse cells (default 4).
+    pub max_growth: f64,
+    /// Deepest octree level (default 16).
+    pub max_depth: u32,
+    /// Largest support handled by an RBF; larger ones are subsampled (default 60).
+    pub rbf_max_points: usize,
+    /// Smallest normal . axis for a height polynomial (default 0.3).
+    pub min_normal_cos: f64,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            tolerance: 2e-4,
+            max_points: 120,
+            min_points: 20,
+            overlap: 0.1,
+            max_growth: 4.0,
+            max_depth: 16,
+            rbf_max_points: 60,
+            min_normal_cos: 0.3,
+        }
+    }
+}
+
+impl FitOptions {
+    fn validate(&self) -> Result<()> {
+        let bad = |m: &str| Err(Error::InvalidOption(m.to_string()));
+        if !(self.tolerance > 0.0 && self.tolerance.is_finite()) {
+            return bad("tolerance must be positive");
+        }
+        if self.min_points < 4 || self.max_points < 2 * self.min_points {
+            return bad("need min_points >= 4 and max_points >= 2 min_points");
+        }
+        if !(self.overlap > 0.0 && self.overlap <= 2.0) {
+            return bad("overlap must be in (0, 2]");
+        }
+        if !(self.max_growth >= 1.0 && self.max_growth.is_finite()) {
+            return bad("max_growth must be >= 1");
+        }
+        if self.max_depth == 0 || self.max_depth > 30 {
+            return bad("max_depth must be in 1..=30");
+        }
+        if self.rbf_max_points < 10 {
+            return bad("rbf_max_points must be >= 10");
+        }
+        Ok(())
+    }
+}
+
+/// What the fit produced.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct FitStats {
+    pub points: usize,
+    pub cells: usize,
+    pub linear: usize,
+    pub quadratic: usize,
+    pub cubic: usize,
+    pub rbf: usize,
+    pub constant: usize,
+    /// Cells without points in their support (holes, empty space), counted in the kinds above.
+    pub extrapolating: usize,
+    /// Extrapolating cells that use an RBF (hole bridges).
+    pub extrapolating_rbf: usize,
+    /// Cells whose function misses the tolerance (too few points to split further).
+    pub over_tolerance: usize,
+    pub max_depth: u32,
+    /// Largest |f| at a support point over all cells, relative to the diagonal.
+    pub max_residual: f64,
+    pub mean_support_points: f64,
+    pub diagonal: f64,
+}
+
+/// One domain: its support box and function.
+#[derive(Debug, Clone)]
+pub struct Cell {
+    pub center: Point3<f64>,
+    pub half: Vector3<f64>,
+    pub function: LocalFunction,
+    /// Factor on the blending weight: 1 for cells with points in their support, small for
+    /// empty cells, which only extrapolate and should count only where nothing else does.
+    pub priority: f64,
+    pub support_points: u32,
+    pub max_residual: f64,
+    pub meets_tolerance: bool,
+}
+
+/// The blended implicit surface.
+#[derive(Debug)]
+pub struct PouImplicit {
+    tree: Octree<Cell>,
+    points: Vec<Point3<f64>>,
+    normals: Vec<Vector3<f64>>,
+    kd: KdTree,
+    diagonal: f64,
+    stats: FitStats,
+}
+
+/// Weight factor of cells without points in their support (holes, empty space): they decide F
+/// only where no fitted cell reaches.
+const EXTRAPOLATION_PRIORITY: f64 = 1e-12;
+
+/// Seed 003 eq. 7b and its derivative dW/dd.
+#[inline]
+fn weight(d: f64) -> (f64, f64) {
+    let d2 = d * d;
+    let w = 1.0 + d2 * d * (-10.0 + d * (15.0 - 6.0 * d));
+    let dw = -30.0 * d2 * (1.0 - d) * (1.0 - d);
+    (w, dw)
+}
+
+impl PouImplicit {
+    /// Fits the implicit to oriented points (normals point outwards, need not be unit).
+    /// Points with a zero or non-finite normal are left out.
+    pub fn fit(
+        points: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        opts: &FitOptions,
+    ) -> Result<PouImplicit> {
+        opts.validate()?;
+        if points.len() != normals.len() {
+            return Err(Error::Degenerate(format!(
+                "{} points but {} normals",
+                points.len(),
+                normals.len()
+            )));
+        }
+        let mut pts = Vec::with_capacity(points.len());
+        let mut nrm = Vec::with_capacity(points.len());
+        for (p, n) in points.iter().zip(normals) {
+            if !p.coords.iter().all(|c| c.is_finite()) {
+                return Err(Error::Degenerate("non-finite point coordinate".into()));
+            }
+            if let Some(u) = n.try_normalize(1e-300) {
+                if u.iter().all(|c| c.is_finite()) {
+                    pts.push(*p);
+                    nrm.push(u);
+                }
+            }
+        }
+        if pts.len() < 10 {
+            return Err(Error::Degenerate(format!(
+                "an implicit surface needs at least 10 oriented points, got {}",
+                pts.len()
+            )));
+        }
+        let bbox = Aabb::of(&pts).ok_or_else(|| Error::Degenerate("no points".into()))?;
+        let diagonal = bbox.diagonal();
+        if diagonal.is_nan() || diagonal <= 0.0 {
+            return Err(Error::Degenerate("all points coincide".into()));
+        }
+        let kd = KdTree::build(&pts)?;
+        let root = Cube::around(&bbox, 0.1);
+        let tol = opts.tolerance * diagonal;
+        let builder = Builder {
+            pts: &pts,
+            nrm: &nrm,
+            kd: &kd,
+            opts,
+            tol,
+            root_half: 0.5 * root.size,
+        };
+        let tree = Octree::build(root, &pts, opts.max_depth, |c| builder.decide(c));
+        let mut stats = FitStats {
+            points: pts.len(),
+            cells: tree.payloads().len(),
+            diagonal,
+            ..Default::default()
+        };
+        let mut support_sum = 0usize;
+        for (cell, &depth) in tree.payloads().iter().zip(tree.leaf_depths()) {
+            match cell.function.kind() {
+                LocalKind::Linear => stats.linear += 1,
+                LocalKind::Quadratic => stats.quadratic += 1,
+                LocalKind::Cubic => stats.cubic += 1,
+                LocalKind::Rbf => stats.rbf += 1,
+                LocalKind::Constant => stats.constant += 1,
+            }
+            if cell.priority < 1.0 {
+                stats.extrapolating += 1;
+                if cell.function.kind() == LocalKind::Rbf {
+                    stats.extrapolating_rbf += 1;
+                }
+            } else {
+                if !cell.meets_tolerance {
+                    stats.over_tolerance += 1;
+                }
+                stats.max_residual = stats.max_residual.max(cell.max_residual / diagonal);
+            }
+            stats.max_depth = stats.max_depth.max(depth);
+            support_sum += cell.support_points as usize;
+        }
+        stats.mean_support_points = support_sum as f64 / stats.cells.max(1) as f64;
+        Ok(PouImplicit {
+            tree,
+            points: pts,
+            normals: nrm,
+            kd,
+            diagonal,
+            stats,
+        })
+    }
+
+    /// Fit statistics.
+    pub fn stats(&self) -> &FitStats {
+        &self.stats
+    }
+    /// The oriented points the implicit was fitted to.
+    pub fn points(&self) -> (&[Point3<f64>], &[Vector3<f64>]) {
+        (&self.points, &self.normals)
+    }
+    /// k-d tree over [`Self::points`].
+    pub fn kdtree(&self) -> &KdTree {
+        &self.kd
+    }
+    /// Bounding-box diagonal of the points.
+    pub fn diagonal(&self) -> f64 {
+        self.diagonal
+    }
+    /// The root cube of the domain decomposition.
+    pub fn domain(&self) -> Cube {
+        self.tree.root()
+    }
+    /// The domains (for inspection and tests).
+    pub fn cells(&self) -> &[Cell] {
+        self.tree.payloads()
+    }
+
+    /// The cells whose support holds `x`, with their blending weight (seed 003 eq. 7, times the
+    /// cell's priority) and value at `x` (for inspection and tests).
+    pub fn contributions(&self, x: &Point3<f64>) -> Vec<(usize, f64, f64)> {
+        let cells = self.tree.payloads();
+        let mut out = Vec::new();
+        self.tree.for_each_support(x, |l| {
+            let c = &cells[l];
+            let t = (x - c.center).component_div(&c.half);
+            let prod: f64 = (0..3).map(|k| (1.0 - t[k] * t[k]).max(0.0)).product();
+            let w = weight(1.0 - prod).0 * c.priority;
+            out.push((l, w, c.function.value(x)));
+        });
+        out
+    }
+
+    /// Signed distance to the nearest point (sign from its normal): F outside all supports.
+    fn fallback(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+        let (i, d) = self.kd.nearest(x);
+        let v = x - self.points[i];
+        let s = if v.dot(&self.normals[i]) >= 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
+        let g = if d > 0.0 {
+            v * (s / d)
+        } else {
+            self.normals[i]
+        };
+        (s * d, g)
+    }
+
+    /// F(x) and, when `with_gradient`, grad F(x) (seed 003 eq. 8 and its derivative).
+    #[inline]
+    fn blend(&self, x: &Point3<f64>, with_gradient: bool) -> (f64, Vector3<f64>) {
+        let mut sw = 0.0;
+        let mut swf = 0.0;
+        let mut g_wf = Vector3::zeros(); // sum W grad f
+        let mut g_dwf = Vector3::zeros(); // sum grad W f
+        let mut g_dw = Vector3::zeros(); // sum grad W
+        let cells = self.tree.payloads();
+        self.tree.for_each_support(x, |l| {
+            let c = &cells[l];
+            let t = (x - c.center).component_div(&c.half);
+            let q = Vector3::new(1.0 - t.x * t.x, 1.0 - t.y * t.y, 1.0 - t.z * t.z);
+            if q.x <= 0.0 || q.y <= 0.0 || q.z <= 0.0 {
+                return;
+            }
+            let prod = q.x * q.y * q.z;
+            let d = 1.0 - prod;
+            let (w, dw) = weight(d);
+            let (w, dw) = (w * c.priority, dw * c.priority);
+            if w <= 0.0 {
+                return;
+            }
+            if with_gradient {
+                let (f, gf) = c.function.value_and_gradient(x);
+                // d d / d x_r = 2 t_r / a_r * prod_{s != r} q_s
+                let gd = Vector3::new(
+                    2.0 * t.x / c.half.x * q.y * q.z,
+                    2.0 * t.y / c.half.y * q.x * q.z,
+                    2.0 * t.z / c.half.z * q.x * q.y,
+                );
+                let gw = gd * dw;
+                sw += w;
+                swf += w * f;
+                g_wf += gf * w;
+                g_dwf += gw * f;
+                g_dw += gw;
+            } else {
+                let f = c.function.value(x);
+                sw += w;
+                swf += w * f;
+            }
+        });
+        if sw.is_nan() || sw <= 1e-300 {
+            return self.fallback(x);
+        }
+        let f = swf / sw;
+        if with_gradient {
+            (f, (g_wf + g_dwf - g_dw * f) / sw)
+        } else {
+            (f, Vector3::zeros())
+        }
+    }
+}
+
+impl Implicit for PouImplicit {
+    fn value(&self, x: &Point3<f64>) -> f64 {
+        self.blend(x, false).0
+    }
+    fn gradient(&self, x: &Point3<f64>) -> Vector3<f64> {
+        self.blend(x, true).1
+    }
+    fn value_and_gradient(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+        self.blend(x, true)
+    }
+}
+
+/// The split rule of the octree: fits a cell and decides whether it is a leaf.
+struct Builder<'a> {
+    pts: &'a [Point3<f64>],
+    nrm: &'a [Vector3<f64>],
+    kd: &'a KdTree,
+    opts: &'a FitOptions,
+    tol: f64,
+    root_half: f64,
+}
+
+impl Builder<'_> {
+    /// Indices of the points inside the box of half-width `h` around `c`.
+    fn in_box(&self, c: &Point3<f64>, h: f64) -> Vec<usize> {
+        let mut idx = self.kd.within(c, h * 3f64.sqrt());
+        idx.retain(|&i| {
+            let p = &self.pts[i];
+            (0..3).all(|k| (p[k] - c[k]).abs() <= h)
+        });
+        idx
+    }
+
+    fn leaf(&self, c: Point3<f64>, h: f64, n: usize, fit: LocalFit) -> Decision<Cell> {
+        self.leaf_with(c, h, n, fit, 1.0)
+    }
+
+    fn leaf_with(
+        &self,
+        c: Point3<f64>,
+        h: f64,
+        n: usize,
+        fit: LocalFit,
+        priority: f64,
+    ) -> Decision<Cell> {
+        let meets = fit.meets(self.tol);
+        Decision::Leaf {
+            payload: Cell {
+                center: c,
+                half: Vector3::repeat(h),
+                function: fit.function,
+                priority,
+                support_points: n as u32,
+                max_residual: fit.max_residual,
+                meets_tolerance: meets,
+            },
+            support: Aabb {
+                min: c - Vector3::repeat(h),
+                max: c + Vector3::repeat(h),
+            },
+        }
+    }
+
+    /// True when the fitted height surface crosses the cell somewhere farther than a quarter of
+    /// the cell's edge from every point (the cell's points cover only part of it).
+    fn has_gap(&self, cube: &Cube, f: &LocalFunction) -> bool {
+        let LocalFunction::Poly(hp) = f else {
+            return false;
+        };
+        let fr = &hp.frame;
+        // Natural gaps between samples are up to about the sampling radius.
+        let gap = (0.25 * cube.size).max(self.sampling_radius(&cube.center()));
+        let half = 0.5 * cube.size * 3f64.sqrt() / fr.scale;
+        let c = fr.local(&cube.center());
+        const N: usize = 6;
+        for i in 0..N {
+            for j in 0..N {
+                let u = c.x + half * (2.0 * (i as f64 + 0.5) / N as f64 - 1.0);
+                let v = c.y + half * (2.0 * (j as f64 + 0.5) / N as f64 - 1.0);
+                let x = hp.surface_point(u, v);
+                if cube.contains(&x) && self.kd.nearest(&x).1 > gap {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// An empty cell that the surface passes by rather than through (no tangent plane of the
+    /// nearest points cuts its box) only needs a rough signed distance: a quadratic fitted to
+    /// the nearest points, or the tangent plane of the nearest one. `None` for a possible hole.
+    fn side_cell(&self, c: &Point3<f64>, h0: f64) -> Option<Decision<Cell>> {
+        let o = self.opts;
+        let near = self.kd.knn(c, o.min_points);
+        let reach = h0 * 3f64.sqrt();
+        if near
+            .iter()
+            .any(|&(i, _)| (c - self.pts[i]).dot(&self.nrm[i]).abs() <= reach)
+        {
+            return None;
+        }
+        let p: Vec<Point3<f64>> = near.iter().map(|&(i, _)| self.pts[i]).collect();
+        let n: Vec<Vector3<f64>> = near.iter().map(|&(i, _)| self.nrm[i]).collect();
+        let scale = near.last().map_or(h0, |x| x.1).max(1e-300);
+        let quad = super::poly::Frame::from_normals(&p, &n, scale, o.min_normal_cos)
+            .and_then(|fr| local::fit_poly(&p, &n, fr, Degree::Quadratic))
+            .filter(|f| f.normal_agreement >= 0.9);
+        let fit = match quad {
+            Some(f) => f,
+            None => {
+                let (i, _) = near[0];
+                let frame = super::poly::Frame::new(self.pts[i], self.nrm[i], scale)?;
+                local::assess(
+                    LocalFunction::Poly(super::poly::HeightPoly {
+                        frame,
+                        degree: Degree::Linear,
+                        coef: [0.0; 10],
+                    }),
+                    &p,
+                    &n,
+                )
+            }
+        };
+        Some(self.leaf_with(*c, h0, p.len(), fit, EXTRAPOLATION_PRIORITY))
+    }
+
+    /// A thin-plate RBF through the points (an evenly strided subset of at most
+    /// `rbf_max_points` of them), assessed at all of them.
+    fn rbf(&self, p: &[Point3<f64>], n: &[Vector3<f64>], params: &LocalParams) -> Option<LocalFit> {
+        let m = self.opts.rbf_max_points;
+        let fit = if p.len() > m {
+            let step = p.len() as f64 / m as f64;
+            let sel: Vec<usize> = (0..m).map(|k| (k as f64 * step) as usize).collect();
+            let sp: Vec<Point3<f64>> = sel.iter().map(|&i| p[i]).collect();
+            let sn: Vec<Vector3<f64>> = sel.iter().map(|&i| n[i]).collect();
+            local::fit_rbf(&sp, &sn, params)?
+        } else {
+            local::fit_rbf(p, n, params)?
+        };
+        Some(local::assess(fit, p, n))
+    }
+
+    /// True when the points `idx`, seen in the plane across their mean normal, lie all around
+    /// `c` (no empty angular sector wider than 120 degrees).
+    fn surrounds(&self, idx: &[usize], c: &Point3<f64>) -> bool {
+        let mean: Vector3<f64> = idx.iter().map(|&i| self.nrm[i]).sum();
+        let Some(frame) = super::poly::Frame::new(*c, mean, 1.0) else {
+            return false;
+        };
+        let mut ang: Vec<f64> = idx
+            .iter()
+            .map(|&i| {
+                let l = frame.local(&self.pts[i]);
+                l.y.atan2(l.x)
+            })
+            .collect();
+        if ang.len() < 3 {
+            return false;
+        }
+        ang.sort_by(f64::total_cmp);
+        let mut gap = ang[0] + std::f64::consts::TAU - ang[ang.len() - 1];
+        for w in ang.windows(2) {
+            gap = gap.max(w[1] - w[0]);
+        }
+        gap < 2.0 * std::f64::consts::FRAC_PI_3
+    }
+
+    /// Radius around the point nearest to `c` holding `min_points` points: the smallest useful
+    /// support there.
+    fn sampling_radius(&self, c: &Point3<f64>) -> f64 {
+        let (i, _) = self.kd.nearest(c);
+        self.kd
+            .knn(&self.pts[i], self.opts.min_points)
+            .last()
+            .map_or(0.0, |x| x.1)
+    }
+
+    fn constant(&self, c: Point3<f64>, h: f64, n: usize) -> Decision<Cell> {
+        let (i, d) = self.kd.nearest(&c);
+        let s = if (c - self.pts[i]).dot(&self.nrm[i]) >= 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
+        self.leaf_with(
+            c,
+            h,
+            n,
+            LocalFit {
+                function: LocalFunction::Constant(s * d),
+                max_residual: 0.0,
+                rms_residual: 0.0,
+                normal_agreement: 1.0,
+            },
+            EXTRAPOLATION_PRIORITY,
+        )
+    }
+
+    fn decide(&self, ctx: &CellContext) -> Decision<Cell> {
+        let o = self.opts;
+        let c = ctx.cube.center();
+        // Weight support: the cell enlarged by the overlap (seed 003). The fit set may grow
+        // beyond it, never shrink below it, so F vanishes near every point in the support.
+        let h0 = 0.5 * ctx.cube.size * (1.0 + o.overlap);
+        let idx0 = self.in_box(&c, h0);
+        if idx0.len() > o.max_points && ctx.can_split {
+            return Decision::Split;
+        }
+        let mut h = h0;
+        let mut idx = idx0.clone();
+        let empty = idx0.is_empty();
+        // Sparse cells grow their fit set up to `max_growth`; empty ones (holes) as far as needed.
+        let limit = if empty {
+            self.root_half
+        } else {
+            h0 * o.max_growth
+        };
+        while idx.len() < o.min_points && h < limit {
+            h *= 1.25;
+            idx = self.in_box(&c, h);
+        }
+        if empty && idx.len() < o.min_points {
+            // Far from the points: a constant signed-distance estimate.
+            return self.constant(c, h0, 0);
+        }
+        if empty {
+            if let Some(side) = self.side_cell(&c, h0) {
+                return side;
+            }
+        }
+        if empty {
+            // A hole (or the space beside the surface): widen the fit set until it surrounds the
+            // cell, reaching across the hole rather than only to its nearest edge. Only points
+            // facing like the nearest ones count (the rim of a hole in a flat base, not the
+            // walls rising beside it).
+            let nref: Vector3<f64> = self
+                .kd
+                .knn(&c, o.min_points)
+                .iter()
+                .map(|&(i, _)| self.nrm[i])
+                .sum();
+            let nref = nref.try_normalize(1e-12).unwrap_or_else(Vector3::zeros);
+            let facing = |idx: Vec<usize>| -> Vec<usize> {
+                idx.into_iter()
+                    .filter(|&i| self.nrm[i].dot(&nref) > 0.5)
+                    .collect()
+            };
+            idx = facing(idx);
+            while (idx.len() < 3 * o.min_points || !self.surrounds(&idx, &c)) && h < limit {
+                h *= 1.25;
+                idx = facing(self.in_box(&c, h));
+            }
+        }
+        let p: Vec<Point3<f64>> = idx.iter().map(|&i| self.pts[i]).collect();
+        let n: Vec<Vector3<f64>> = idx.iter().map(|&i| self.nrm[i]).collect();
+        let params = LocalParams {
+            tolerance: self.tol,
+            min_normal_cos: o.min_normal_cos,
+            scale: h,
+            rbf_eps: 0.1 * h,
+        };
+        let mut best: Option<LocalFit> = None;
+        // Empty cells only extrapolate: a looser tolerance, and the lowest degree meeting it.
+        let tol = if empty {
+            (10.0 * self.tol).max(0.02 * h)
+        } else {
+            self.tol
+        };
+        if let Some(frame) = local::height_frame(&p, &n, &params) {
+            for degree in [Degree::Quadratic, Degree::Cubic] {
+                let fit = local::fit_poly(&p, &n, frame, degree);
+                if let Some(f) = fit.as_ref().filter(|f| f.meets(tol)) {
+                    if empty {
+                        return self.leaf_with(c, h0, p.len(), f.clone(), EXTRAPOLATION_PRIORITY);
+                    }
+                    if ctx.can_split && self.has_gap(&ctx.cube, &f.function) {
+                        // The points cover only part of the cell: extrapolating over the rest
+                        // (a hole) is better done by smaller cells with wider fits.
+                        return Decision::Split;
+                    }
+                    return self.leaf(c, h0, p.len(), f.clone());
+                }
+                best = local::better(best, fit, tol);
+            }
+        }
+        if empty {
+            // An empty cell next to the points (a hole, or the space beside the surface): its
+            // function only extrapolates, so a looser fit is fine. Where no height function fits
+            // (the hole's rim bends), a thin-plate RBF through the rim bridges it as in seed 003;
+            // a bad fit becomes a constant.
+            // A cheap polynomial within the loose tolerance is enough; the RBF only where the
+            // polynomials are far off.
+            if !best
+                .as_ref()
+                .is_some_and(|f| f.max_residual <= tol && f.normal_agreement >= 0.9)
+            {
+                best = local::better(best, self.rbf(&p, &n, &params), tol);
+            }
+            // Any sensible bridge beats a constant, whose jumps to its neighbours are walls.
+            return match best {
+                Some(f) if f.max_residual <= tol.max(0.25 * h) && f.normal_agreement >= 0.9 => {
+                    self.leaf_with(c, h0, p.len(), f, EXTRAPOLATION_PRIORITY)
+                }
+                _ => self.constant(c, h0, 0),
+            };
+        }
+        // Split while that makes the fit set more local: the cell holds more than a few points,
+        // or its fit set had to grow well beyond it (the cell clips the surface at a corner).
+        if ctx.can_split
+            && (idx0.len() > o.min_points / 2 || (h > 2.0 * h0 && h0 > self.sampling_radius(&c)))
+        {
+            return Decision::Split;
+        }
+        // Too small to split: an RBF through the (sub-sampled) support.
+        best = local::better(best, self.rbf(&p, &n, &params), self.tol);
+        if best.is_none() {
+            // Last resort: a plane-like height function along the mean normal.
+            let mean: Vector3<f64> = n.iter().sum();
+            let centroid = p.iter().map(|q| q.coords).sum::<Vector3<f64>>() / p.len() as f64;
+            if let Some(frame) = super::poly::Frame::new(Point3::from(centroid), mean, h) {
+                best = local::fit_poly(&p, &n, frame, Degree::Linear);
+            }
+        }
+        match best {
+            Some(f) => self.leaf(c, h0, p.len(), f),
+            None => self.constant(c, h0, p.len()),
+        }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// Fibonacci points on a sphere of radius `r` (with their normals), skipping a polar cap of
+    /// half-angle `hole` radians around +z.
+    pub(crate) fn sphere(n: usize, r: f64, hole: f64) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>) {
+        let ga = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        let mut p = Vec::new();
+        let mut nn = Vec::new();
+        for i in 0..n {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            if z > hole.cos() {
+                continue;
+            }
+            let s = (1.0 - z * z).sqrt();
+            let t = ga * i as f64;
+            let d = Vector3::new(s * t.cos(), s * t.sin(), z);
+            p.push(Point3::from(d * r));
+            nn.push(d);
+        }
+        (p, nn)
+    }
+
+    /// Largest |F| over points of the true sphere, relative to the diagonal.
+    fn zero_set_error(f: &PouImplicit, r: f64) -> f64 {
+        let (probe, _) = sphere(3000, r, 0.0);
+        probe
+            .iter()
+            .map(|x| f.value(&Point3::from(x.coords * 1.0001)).abs())
+            .fold(0.0, f64::max)
+            / f.diagonal()
+    }
+
+    #[test]
+    fn sphere_zero_set_and_sign() {
+        let (p, n) = sphere(4000, 1.0, 0.0);
+        let f = PouImplicit::fit(&p, &n, &FitOptions::default()).unwrap();
+        let st = f.stats();
+        assert!(st.cells > 8, "{st:?}");
+        assert!(f.value(&Point3::origin()) < 0.0);
+        assert!(f.value(&Point3::new(1.05, 0.0, 0.0)) > 0.0);
+        let e = zero_set_error(&f, 1.0);
+        assert!(e < 1e-3, "{e} {st:?}");
+        // Gradient: analytic vs central difference, about the unit normal on the surface.
+        let x = Point3::new(0.3, 0.5, (1.0f64 - 0.34).sqrt());
+        let (_, g) = f.value_and_gradient(&x);
+        let h = 1e-6;
+        for k in 0..3 {
+            let mut a = x;
+            let mut b = x;
+            a[k] += h;
+            b[k] -= h;
+            let fd = (f.value(&a) - f.value(&b)) / (2.0 * h);
+            assert!((fd - g[k]).abs() < 1e-4, "{fd} {}", g[k]);
+        }
+        assert!((g.normalize() - x.coords).norm() < 0.02);
+    }
+
+    #[test]
+    fn sphere_with_missing_cap_is_bridged() {
+        let (p, n) = sphere(4000, 1.0, 0.25);
+        let f = PouImplicit::fit(&p, &n, &FitOptions::default()).unwrap();
+        let e = zero_set_error(&f, 1.0);
+        assert!(e < 1e-3, "{e} {:?}", f.stats());
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        let o = FitOptions::default();
+        assert!(PouImplicit::fit(&[], &[], &o).is_err());
+        let p = vec![Point3::new(1.0, 2.0, 3.0); 50];
+        let n = vec![Vector3::z(); 50];
+        assert!(PouImplicit::fit(&p, &n, &o).is_err());
+        let (mut p, n) = sphere(100, 1.0, 0.0);
+        p[3].x = f64::NAN;
+        assert!(PouImplicit::fit(&p, &n, &o).is_err());
+        let bad = FitOptions {
+            tolerance: -1.0,
+            ..o
+        };
+        assert!(PouImplicit::fit(&p, &n, &bad).is_err());
+    }
+}
+#[cfg(test)]
+mod debug_tests {
+    use super::tests::sphere;
+    use super::*;
+    #[test]
+    #[ignore]
+    fn dump_cells() {
+        let (p, n) = sphere(4000, 1.0, 0.25);
+        let f = PouImplicit::fit(&p, &n, &FitOptions::default()).unwrap();
+        let (probe, _) = sphere(3000, 1.0, 0.0);
+        let mut errs: Vec<(f64, Point3<f64>)> = probe.iter().map(|x| (f.value(x), *x)).collect();
+        errs.sort_by(|a, b| b.0.abs().partial_cmp(&a.0.abs()).unwrap());
+        for (e, x) in &errs[..10] {
+            println!("err {e:.3e} at {x:?}");
+            f.tree.for_each_support(x, |l| {
+                let c = &f.cells()[l];
+                println!(
+                    "   {:?} {:?} n={} res={:.3e} h={:.3} f={:.3e} pr={} ok={}",
+                    c.center,
+                    c.function.kind(),
+                    c.support_points,
+                    c.max_residual,
+                    c.half.x,
+                    c.function.value(x),
+                    c.priority,
+                    c.meets_tolerance
+                );
+            });
+        }
+    }
+}
+#[cfg(test)]
+mod overlap_tests {
+    use super::tests::sphere;
+    use super::*;
+    #[test]
+    #[ignore]
+    fn overlaps() {
+        for hole in [0.0, 0.25] {
+            let (p, n) = sphere(4000, 1.0, hole);
+            let (probe, _) = sphere(5000, 1.0, 0.0);
+            for ov in [0.1, 0.25, 0.5, 0.75] {
+                let o = FitOptions {
+                    overlap: ov,
+                    ..Default::default()
+                };
+                let f = PouImplicit::fit(&p, &n, &o).unwrap();
+                let e = probe.iter().map(|x| f.value(x).abs()).fold(0.0, f64::max) / f.diagonal();
+                let m = probe.iter().map(|x| f.value(x).abs()).sum::<f64>()
+                    / probe.len() as f64
+                    / f.diagonal();
+                println!(
+                    "hole {hole} overlap {ov}: max {e:.3e} mean {m:.3e} {:?}",
+                    f.stats()
+                );
+            }
+        }
+    }
+}

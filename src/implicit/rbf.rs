@@ -1,0 +1,284 @@
+//! Thin-plate radial basis function interpolation (seed 003 eq. 1-6, seed 004 eq. 3).
+//!
+//! ```text
+//! f(x) = sum_j lambda_j phi(|x - c_j|) + P0 + P1 x + P2 y + P3 z,   phi(r) = r^2 log r   (eq. 1-2)
+//! f(c_i) = h_i                                                                           (eq. 3-4)
+//! sum_j lambda_j = sum_j lambda_j c_j = 0                                                (eq. 5)
+//! ```
+//!
+//! giving the symmetric saddle-point system of eq. 6, `[A P; P^T 0] [lambda; p] = [h; 0]`. It is
+//! solved with faer's symmetric-indefinite (Bunch-Kaufman LBL^T) factorization; the residual is
+//! checked and a singular or inaccurate solve is an `Err`, never a panic.
+//!
+//! Coordinates are centred and scaled (x -> (x - o) / L) before solving: the interpolant is
+//! invariant under this (phi(s r) = s^2 phi(r) + s^2 log(s) r^2 and the r^2 part is cancelled by
+//! eq. 5), while the conditioning improves.
+//!
+//! [`ThinPlateRbf::fit_surface`] builds the constraints of a surface: zeros at the on-surface
+//! points (eq. 4a) and +eps / -eps at points offset by eps along / against the normals (eq. 4b),
+//! so f is positive outside and approximates the signed distance near the points.
+
+use crate::{Error, Result};
+use faer::linalg::solvers::Solve;
+use faer::{Mat, Side};
+use nalgebra::{Point3, Vector3};
+
+/// A fitted thin-plate RBF implicit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ThinPlateRbf {
+    origin: Point3<f64>,
+    scale: f64,
+    /// Centres in scaled coordinates.
+    centers: Vec<Vector3<f64>>,
+    lambdas: Vec<f64>,
+    /// P0 + P . X in scaled coordinates X.
+    p0: f64,
+    p: Vector3<f64>,
+}
+
+#[inline]
+fn phi(r2: f64) -> f64 {
+    // r^2 log r = 0.5 r^2 log r^2, with the limit 0 at r = 0.
+    if r2 > 0.0 {
+        0.5 * r2 * r2.ln()
+    } else {
+        0.0
+    }
+}
+
+impl ThinPlateRbf {
+    /// Interpolates the values `h` at `centers` (eq. 1-6). Needs at least 4 non-coplanar
+    /// centres; duplicate centres make the system singular (an `Err`).
+    pub fn fit(centers: &[Point3<f64>], h: &[f64]) -> Result<ThinPlateRbf> {
+        let n = centers.len();
+        if n < 4 || h.len() != n {
+            return Err(Error::Degenerate(format!(
+                "thin-plate RBF needs at least 4 centres with values, got {n}"
+            )));
+        }
+        if centers
+            .iter()
+            .any(|c| !c.coords.iter().all(|x| x.is_finite()))
+            || h.iter().any(|x| !x.is_finite())
+        {
+            return Err(Error::Degenerate("non-finite RBF constraint".into()));
+        }
+        let mut o = Vector3::zeros();
+        for c in centers {
+            o += c.coords;
+        }
+        let origin = Point3::from(o / n as f64);
+        let scale = centers
+            .iter()
+            .map(|c| (c - origin).norm())
+            .fold(0.0, f64::max);
+        if scale.is_nan() || scale <= 0.0 {
+            return Err(Error::Degenerate("coincident RBF centres".into()));
+        }
+        let xs: Vec<Vector3<f64>> = centers.iter().map(|c| (c - origin) / scale).collect();
+        // The linear part P(x) is only determined when the centres span 3D (eq. 5-6 singular
+        // otherwise): the smallest eigenvalue of their covariance must not vanish.
+        let mut cov = nalgebra::Matrix3::zeros();
+        for x in &xs {
+            cov += x * x.transpose();
+        }
+        let ev = nalgebra::SymmetricEigen::new(cov / n as f64).eigenvalues;
+        if ev.min().is_nan() || ev.min() <= 1e-12 {
+            return Err(Error::Degenerate("coplanar RBF centres".into()));
+        }
+        let m = n + 4;
+        let mut a = Mat::<f64>::zeros(m, m);
+        for i in 0..n {
+            for j in 0..i {
+                let v = phi((xs[i] - xs[j]).norm_squared());
+                a[(i, j)] = v;
+                a[(j, i)] = v;
+            }
+            a[(i, n)] = 1.0;
+            a[(n, i)] = 1.0;
+            for k in 0..3 {
+                a[(i, n + 1 + k)] = xs[i][k];
+                a[(n + 1 + k, i)] = xs[i][k];
+            }
+        }
+        let mut b = Mat::<f64>::zeros(m, 1);
+        for i in 0..n {
+            b[(i, 0)] = h[i];
+        }
+        let x = a.lblt(Side::Lower).solve(&b);
+        // Residual check: the factorization does not report singularity itself.
+        let mut res = 0.0f64;
+        let mut bnorm = 0.0f64;
+        for i in 0..m {
+            let mut s = 0.0;
+            for j in 0..m {
+                s += a[(i, j)] * x[(j, 0)];
+            }
+            res = res.max((s - b[(i, 0)]).abs());
+            bnorm = bnorm.max(b[(i, 0)].abs());
+        }
+        let xmax = (0..m).map(|i| x[(i, 0)].abs()).fold(0.0, f64::max);
+        if !res.is_finite() || !xmax.is_finite() || res > 1e-8 * (bnorm + xmax) {
+            return Err(Error::Numerical(format!(
+                "thin-plate RBF system is singular or ill-conditioned (residual {res:.3e})"
+            )));
+        }
+        Ok(ThinPlateRbf {
+            origin,
+            scale,
+            centers: xs,
+            lambdas: (0..n).map(|i| x[(i, 0)]).collect(),
+            p0: x[(n, 0)],
+            p: Vector3::new(x[(n + 1, 0)], x[(n + 2, 0)], x[(n + 3, 0)]),
+        })
+    }
+
+    /// Surface implicit through `points` (value 0) with off-surface constraints (seed 003 eq. 4b):
+    /// +eps at `p + eps n` for even-numbered points and -eps at `p - eps n` for odd-numbered ones,
+    /// so both sides are held with 2n rather than 3n unknowns. An offset is shortened, down to
+    /// eps/8, while another point is nearer to the offset point than its own point (Carr et al.
+    /// 2001), and dropped when that does not help.
+    pub fn fit_surface(
+        points: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        eps: f64,
+    ) -> Result<ThinPlateRbf> {
+        if points.len() != normals.len() {
+            return Err(Error::Degenerate(
+                "points and normals differ in count".into(),
+            ));
+        }
+        let mut c = Vec::with_capacity(3 * points.len());
+        let mut h = Vec::with_capacity(3 * points.len());
+        c.extend_from_slice(points);
+        h.extend(std::iter::repeat_n(0.0, points.len()));
+        for (i, (p, n)) in points.iter().zip(normals).enumerate() {
+            let Some(n) = n.try_normalize(1e-300) else {
+                continue;
+            };
+            // One offset per point, alternately outside and inside: both sides are constrained
+            // with a system of 2n rather than 3n unknowns.
+            {
+                let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+                let mut e = eps;
+                for _ in 0..4 {
+                    let q = p + n * (sign * e);
+                    let own = (q - p).norm_squared();
+                    let clash = points
+                        .iter()
+                        .enumerate()
+                        .any(|(j, r)| j != i && (q - r).norm_squared() < own * 0.999);
+                    if !clash {
+                        c.push(q);
+                        h.push(sign * e);
+                        break;
+                    }
+                    e *= 0.5;
+                }
+            }
+        }
+        ThinPlateRbf::fit(&c, &h)
+    }
+
+    /// Number of centres.
+    pub fn len(&self) -> usize {
+        self.centers.len()
+    }
+    /// True when there are no centres (never for a fitted RBF).
+    pub fn is_empty(&self) -> bool {
+        self.centers.is_empty()
+    }
+
+    /// f(x).
+    pub fn value(&self, x: &Point3<f64>) -> f64 {
+        let y = (x - self.origin) / self.scale;
+        let mut s = self.p0 + self.p.dot(&y);
+        for (c, l) in self.centers.iter().zip(&self.lambdas) {
+            s += l * phi((y - c).norm_squared());
+        }
+        s
+    }
+
+    /// f(x) and its analytic gradient: grad phi(|y - c|) = (y - c)(2 log r + 1).
+    pub fn value_and_gradient(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+        let y = (x - self.origin) / self.scale;
+        let mut s = self.p0 + self.p.dot(&y);
+        let mut g = self.p;
+        for (c, l) in self.centers.iter().zip(&self.lambdas) {
+            let d = y - c;
+            let r2 = d.norm_squared();
+            if r2 > 0.0 {
+                let lr2 = r2.ln();
+                s += l * 0.5 * r2 * lr2;
+                g += d * (l * (lr2 + 1.0));
+            }
+        }
+        (s, g / self.scale)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sphere_points(n: usize) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>) {
+        // Fibonacci sphere of radius 1.
+        let ga = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        let mut p = Vec::new();
+        let mut nn = Vec::new();
+        for i in 0..n {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let t = ga * i as f64;
+            let d = Vector3::new(r * t.cos(), r * t.sin(), z);
+            p.push(Point3::from(d));
+            nn.push(d);
+        }
+        (p, nn)
+    }
+
+    #[test]
+    fn interpolates_and_gradient_is_exact() {
+        let (p, n) = sphere_points(60);
+        let f = ThinPlateRbf::fit_surface(&p, &n, 0.1).unwrap();
+        for q in &p {
+            assert!(f.value(q).abs() < 1e-9);
+        }
+        assert!(f.value(&Point3::origin()) < 0.0);
+        assert!(f.value(&Point3::new(0.0, 0.0, 1.3)) > 0.0);
+        // Zero set near the unit sphere between the samples.
+        let x = Point3::from(Vector3::new(0.3, -0.5, 0.7).normalize());
+        assert!(f.value(&x).abs() < 0.02, "{}", f.value(&x));
+        let y = Point3::new(0.2, 0.4, -0.5);
+        let (v, g) = f.value_and_gradient(&y);
+        assert!((v - f.value(&y)).abs() < 1e-12);
+        let h = 1e-6;
+        for k in 0..3 {
+            let mut a = y;
+            let mut b = y;
+            a[k] += h;
+            b[k] -= h;
+            let fd = (f.value(&a) - f.value(&b)) / (2.0 * h);
+            assert!((fd - g[k]).abs() < 1e-5, "{fd} {}", g[k]);
+        }
+    }
+
+    #[test]
+    fn singular_systems_are_errors() {
+        // Duplicate centres with different values.
+        let c = vec![
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+            Point3::new(0.0, 0.0, 1.0),
+            Point3::new(0.0, 0.0, 1.0),
+        ];
+        assert!(ThinPlateRbf::fit(&c, &[0.0, 0.0, 0.0, 1.0, 2.0]).is_err());
+        // Coplanar centres: the linear part is undetermined.
+        let c: Vec<_> = (0..6)
+            .map(|i| Point3::new(i as f64, (i * i) as f64, 0.0))
+            .collect();
+        assert!(ThinPlateRbf::fit(&c, &[0.0, 1.0, 2.0, 3.0, 4.0, 5.0]).is_err());
+        assert!(ThinPlateRbf::fit(&c[..2], &[0.0; 2]).is_err());
+    }
+}
