@@ -9,6 +9,7 @@ pub mod cli;
 pub mod error;
 pub mod implicit;
 pub mod mesh;
+pub mod polygonize;
 
 pub use error::{Error, Result};
 pub use mesh::Mesh;
