@@ -7,6 +7,7 @@
 
 pub mod cli;
 pub mod error;
+pub mod fit;
 pub mod implicit;
 pub mod mesh;
 pub mod polygonize;

@@ -24,6 +24,9 @@ pub struct NetQuality {
     pub min_angle_deg: f64,
     pub mean_angle_deg: f64,
     pub max_angle_deg: f64,
+    /// Mean of |angle - 90 degrees| over all corners (the mean angle itself is about 90 for any
+    /// net of nearly planar quads).
+    pub mean_deviation_deg: f64,
     pub flipped: usize,
     pub degenerate: usize,
     /// max over nodes of |f| / |grad f|.
@@ -32,13 +35,24 @@ pub struct NetQuality {
     pub mean_edge: f64,
 }
 
-/// Per quad: (min angle, sum of angles, max angle, flipped, degenerate-angle), given the
-/// surface normal `n` at the quad centre.
-pub(crate) fn quad_shape(p: &[Point3<f64>; 4], n: &Vector3<f64>) -> (f64, f64, f64, bool, bool) {
+/// Per-quad shape: angles in degrees, flipped / degenerate flags.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct QuadShape {
+    pub min: f64,
+    pub sum: f64,
+    pub max: f64,
+    pub dev: f64,
+    pub flipped: bool,
+    pub degenerate: bool,
+}
+
+/// Shape of a quad given the surface normal `n` at its centre.
+pub(crate) fn quad_shape(p: &[Point3<f64>; 4], n: &Vector3<f64>) -> QuadShape {
     let nq = (p[2] - p[0]).cross(&(p[3] - p[1]));
     let mut mn = f64::INFINITY;
     let mut mx = 0.0f64;
     let mut sum = 0.0;
+    let mut dev = 0.0;
     let dn = nq.dot(n);
     let mut flipped = dn <= 0.0 || dn.is_nan();
     for k in 0..4 {
@@ -49,12 +63,20 @@ pub(crate) fn quad_shape(p: &[Point3<f64>; 4], n: &Vector3<f64>) -> (f64, f64, f
         mn = mn.min(ang);
         mx = mx.max(ang);
         sum += ang;
+        dev += (ang - 90.0).abs();
         let dc = a.cross(&b).dot(&nq);
         if dc <= 0.0 || dc.is_nan() {
             flipped = true;
         }
     }
-    (mn, sum, mx, flipped, mn < 1.0 || mx > 179.0)
+    QuadShape {
+        min: mn,
+        sum,
+        max: mx,
+        dev,
+        flipped,
+        degenerate: mn < 1.0 || mx > 179.0,
+    }
 }
 
 /// Unit normals of f at the quad centres: each centroid projected onto f = 0 (steps capped at
@@ -106,7 +128,7 @@ pub fn node_residuals<I: Implicit + ?Sized>(f: &I, nodes: &[Point3<f64>]) -> Vec
 
 /// Quality of `net` given the normals at the quad centres and the node residuals.
 pub fn quality_with(net: &QuadNet, quad_normals: &[Vector3<f64>], residuals: &[f64]) -> NetQuality {
-    let per: Vec<(f64, f64, f64, bool, bool)> = net
+    let per: Vec<QuadShape> = net
         .quads
         .par_iter()
         .zip(quad_normals.par_iter())
@@ -126,20 +148,24 @@ pub fn quality_with(net: &QuadNet, quad_normals: &[Vector3<f64>], residuals: &[f
         min_angle_deg: f64::INFINITY,
         mean_angle_deg: 0.0,
         max_angle_deg: 0.0,
+        mean_deviation_deg: 0.0,
         flipped: 0,
         degenerate: 0,
         max_residual: residuals.iter().fold(0.0, |a: f64, &b| a.max(b)),
         mean_edge,
     };
-    for (i, &(mn, sum, mx, fl, dg)) in per.iter().enumerate() {
-        q.min_angle_deg = q.min_angle_deg.min(mn);
-        q.max_angle_deg = q.max_angle_deg.max(mx);
-        q.mean_angle_deg += sum;
-        q.flipped += fl as usize;
+    for (i, s) in per.iter().enumerate() {
+        q.min_angle_deg = q.min_angle_deg.min(s.min);
+        q.max_angle_deg = q.max_angle_deg.max(s.max);
+        q.mean_angle_deg += s.sum;
+        q.mean_deviation_deg += s.dev;
+        q.flipped += s.flipped as usize;
         let sh = net.quad_edges[i].iter().any(|&e| short[e as usize]);
-        q.degenerate += (dg || sh) as usize;
+        q.degenerate += (s.degenerate || sh) as usize;
     }
-    q.mean_angle_deg /= (4 * per.len().max(1)) as f64;
+    let corners = (4 * per.len().max(1)) as f64;
+    q.mean_angle_deg /= corners;
+    q.mean_deviation_deg /= corners;
     q
 }
 

@@ -173,7 +173,12 @@ impl Implicit for Blob {
 
 /// `n` points on the zero set, found by projecting a Fibonacci sphere of radius `rad` around
 /// `c` along the gradient.
-pub fn seeds_on<I: Implicit>(f: &I, c: Point3<f64>, rad: f64, n: usize) -> Vec<Point3<f64>> {
+pub fn seeds_on<I: Implicit + ?Sized>(
+    f: &I,
+    c: Point3<f64>,
+    rad: f64,
+    n: usize,
+) -> Vec<Point3<f64>> {
     let opt = super::newton::NewtonOptions::new(rad, 0.25 * rad);
     let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     (0..n)
