@@ -8,6 +8,7 @@
 pub mod cli;
 pub mod error;
 pub mod export;
+pub mod fit;
 pub mod implicit;
 pub mod inspect;
 pub mod io;

@@ -1,0 +1,14 @@
+//! `fit`: from the smoothed quad net on the implicit to the data of one bicubic patch per quad
+//! (seed 004 section 3, Fig. 5(c)): sample grids on f = 0 with boundary tangents, shared
+//! bit-for-bit along every net edge so that the patch network is watertight by construction.
+//!
+//! - [`ribbons`]: quad strips (ribbons) of edges that must share one sample count;
+//! - [`edge_curve`]: the samples and tangents of one net edge, from that edge's data alone;
+//! - [`spline_check`]: the complete cubic spline a row of samples will become, for the
+//!   tolerance test;
+//! - [`samples`]: the per-patch grids, their counts chosen from `--tolerance`.
+
+pub mod edge_curve;
+pub mod ribbons;
+pub mod samples;
+pub mod spline_check;

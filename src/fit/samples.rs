@@ -1,0 +1,849 @@
+//! Per-patch sample grids on the implicit (seed 004 section 3, Fig. 5(c)): for every quad of the
+//! smoothed net, an (S + 1) x (T + 1) grid of points on f = 0 with the boundary tangents that
+//! the bicubic interpolation of eq. 9-14 needs.
+//!
+//! **Patch frame.** Quad [a, b, c, d] (counter-clockwise seen from outside) becomes the patch
+//! with corners (u, v) = (0, 0), (1, 0), (1, 1), (0, 1) at a, b, c, d, so S_u x S_v points
+//! outward. Its sides: v = 0 runs a -> b, u = 1 runs b -> c, v = 1 runs d -> c, u = 0 runs
+//! a -> d ([`PatchSamples::sides`], each with its net edge and whether the patch walks it
+//! against the edge's canonical lower -> higher direction).
+//!
+//! **Counts.** S (u) and T (v) are per ribbon ([`super::ribbons`]): opposite sides of a quad and
+//! both quads of an edge share one count. Start at `min_intervals`; build every patch; for each
+//! quad estimate the deviation of its row splines (u) and column splines (v) from f = 0 at the
+//! interval midpoints ([`super::spline_check`]; these splines are the patch's iso-curves through
+//! the sample rows) and at the cell centres (an estimate); where it exceeds the tolerance, raise the
+//! ribbon's count to S (dev / tol)^(1/4) x 1.1 (the error of cubic interpolation falls like the
+//! fourth power of the spacing), rebuild the patches touching changed ribbons, and repeat. A
+//! ribbon takes the largest count any of its quads needs, so one curved spot densifies its whole
+//! strip: the price of a tensor-product network without T-junctions.
+//!
+//! **Parameters.** Uniform, k / S, snapped to multiples of 2^-40 (exactly symmetric under
+//! t -> 1 - t, and the grid the nurbs module's `Params` uses), identical for every patch of a
+//! ribbon and on both sides of every edge. The edge samples sit at equal chord stations
+//! ([`super::edge_curve`]), so they are nearly equally spaced and eq. 9's square-root chord
+//! parameters would be nearly uniform anyway; uniform values are what two neighbours can
+//! compute identically without seeing each other's interior.
+//!
+//! **Boundary.** Row v = 0 is the sample list of the edge a-b (reversed if a > b), and so on:
+//! points and along-side derivatives come from the shared [`EdgeSamples`], bit-identical for
+//! both neighbours. Along-side derivatives are d/dt of the edge curve, t the edge parameter on
+//! [0, 1], which is the patch parameter along that side: they are derivatives of the patch with
+//! respect to its own parameter, as eq. 11's end conditions require.
+//!
+//! **Interior.** Transfinite (Coons) interpolation of the four boundary sample rows,
+//! P = (1-v) B(u) + v T(u) + (1-u) L(v) + u R(v) - bilinear(corners), each point then moved onto
+//! f = 0 along the Coons blend of the boundary normals (root of f on that line nearest the
+//! Coons point; Newton along the gradient if the line misses).
+//!
+//! **Cross-boundary derivatives.** d/dv on the row v = 0 is the Coons derivative
+//! (1-u) L'(0) + u R'(0) + T(u) - B(u) - [(1-u)(d - a) + u(c - b)], projected onto the
+//! implicit's tangent plane at the sample (normal from the edge data); at the corners it is
+//! exactly the along-side derivative of the adjacent side. Likewise on the other three sides.
+//! The two patches of an edge have different cross derivatives (each points into its own patch,
+//! with its own length), but both lie in the same tangent plane with the along-edge derivative,
+//! so the network is tangent-continuous (G1) at every boundary sample. Between samples the
+//! normal jump depends on the interpolation and is measured downstream (cad_check
+//! normal_jump_deg); at net vertices of valence != 4 one bicubic per quad cannot be G1 in
+//! general (Peters & Fan), so no twist compatibility is attempted here.
+
+use super::edge_curve::{sample_edge, EdgeSamples};
+use super::ribbons::{ribbons, Ribbons};
+use super::spline_check::spline_midpoints;
+use crate::implicit::Implicit;
+use crate::polygonize::newton::{project, solve_on_line, NewtonOptions};
+use crate::polygonize::QuadNet;
+use crate::{Error, Result};
+use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
+
+/// Options of [`sample_patches`].
+#[derive(Debug, Clone, Copy)]
+pub struct SampleOptions {
+    /// Largest allowed distance of the row/column splines from f = 0 (`--tolerance`; the CLI
+    /// default is 1e-4 of the bounding-box diagonal).
+    pub tolerance: f64,
+    /// Model size (bounding-box diagonal): root-finding tolerances are 1e-12 of it.
+    pub scale: f64,
+    /// Fewest and most intervals per side.
+    pub min_intervals: usize,
+    pub max_intervals: usize,
+    /// Refinement rounds.
+    pub max_rounds: usize,
+}
+
+impl SampleOptions {
+    pub fn new(tolerance: f64, scale: f64) -> Self {
+        SampleOptions {
+            tolerance,
+            scale,
+            min_intervals: 2,
+            max_intervals: 48,
+            max_rounds: 6,
+        }
+    }
+}
+
+/// One side of a patch: its net edge, and whether the patch's parameter runs from the edge's
+/// higher node to its lower node (then the patch sees the edge's arrays reversed and its
+/// tangents negated).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct PatchSide {
+    pub edge: u32,
+    pub reversed: bool,
+}
+
+/// The interpolation data of one patch (one quad of the net).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PatchSamples {
+    /// Quad index in the net.
+    pub quad: usize,
+    /// Net nodes at (u, v) = (0, 0), (1, 0), (1, 1), (0, 1).
+    pub corners: [u32; 4],
+    /// Sides v = 0 (a -> b), u = 1 (b -> c), v = 1 (d -> c), u = 0 (a -> d), each in the
+    /// direction of increasing patch parameter.
+    pub sides: [PatchSide; 4],
+    /// points[i][j] at (params_u[i], params_v[j]), S + 1 by T + 1, all on f = 0.
+    pub points: Vec<Vec<Point3<f64>>>,
+    pub params_u: Vec<f64>,
+    pub params_v: Vec<f64>,
+    /// d/du on the column u = 0 and u = 1 (T + 1 each).
+    pub tan_u0: Vec<Vector3<f64>>,
+    pub tan_u1: Vec<Vector3<f64>>,
+    /// d/dv on the row v = 0 and v = 1 (S + 1 each).
+    pub tan_v0: Vec<Vector3<f64>>,
+    pub tan_v1: Vec<Vector3<f64>>,
+    /// Largest distance from f = 0 of the row splines (u) and column splines (v) at their
+    /// interval midpoints: exact for the tensor-product interpolant of eq. 9-14, whose
+    /// iso-curves through the sample rows and columns are these splines.
+    pub deviation_u: f64,
+    pub deviation_v: f64,
+    /// Estimated largest distance from f = 0 at the cell centres (see `build_patch`).
+    pub deviation_cell: f64,
+}
+
+impl PatchSamples {
+    /// The largest of the three deviation estimates.
+    pub fn deviation(&self) -> f64 {
+        self.deviation_u
+            .max(self.deviation_v)
+            .max(self.deviation_cell)
+    }
+}
+
+impl PatchSamples {
+    /// S, the number of intervals in u.
+    pub fn s(&self) -> usize {
+        self.params_u.len() - 1
+    }
+    /// T, the number of intervals in v.
+    pub fn t(&self) -> usize {
+        self.params_v.len() - 1
+    }
+}
+
+/// How the sampling went.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SampleReport {
+    pub rounds: usize,
+    pub ribbons: usize,
+    /// Largest estimated deviation over all patches.
+    pub max_deviation: f64,
+    /// Patches whose estimated deviation exceeds the tolerance (at `max_intervals`).
+    pub over_tolerance: usize,
+    /// Total grid points over all patches, and distinct ones on edges.
+    pub grid_points: usize,
+    /// Histogram of ribbon interval counts: (count, ribbons).
+    pub interval_histogram: Vec<(usize, usize)>,
+}
+
+/// All patches with the shared edge data they were built from.
+#[derive(Debug, Clone)]
+pub struct PatchSampling {
+    pub patches: Vec<PatchSamples>,
+    /// Per net edge, in its canonical direction.
+    pub edges: Vec<EdgeSamples>,
+    pub ribbons: Ribbons,
+    /// Intervals per ribbon.
+    pub intervals: Vec<usize>,
+    pub report: SampleReport,
+}
+
+/// Uniform parameters k / n snapped to multiples of 2^-40 (symmetric: t_{n-k} = 1 - t_k exactly).
+pub fn uniform_params(n: usize) -> Vec<f64> {
+    const SNAP: f64 = (1u64 << 40) as f64;
+    (0..=n)
+        .map(|k| {
+            if k == n {
+                1.0
+            } else {
+                ((k as f64 / n as f64) * SNAP).round() / SNAP
+            }
+        })
+        .collect()
+}
+
+/// Samples every quad of `net` (nodes on f = 0, e.g. after `net_smooth`). Errors: invalid
+/// options, and edge or interior points where the implicit cannot be solved.
+pub fn sample_patches<I: Implicit + ?Sized>(
+    net: &QuadNet,
+    f: &I,
+    opt: &SampleOptions,
+) -> Result<PatchSampling> {
+    if !(opt.tolerance > 0.0 && opt.scale > 0.0)
+        || opt.min_intervals < 1
+        || opt.max_intervals < opt.min_intervals
+        || opt.max_rounds < 1
+    {
+        return Err(Error::InvalidOption(format!(
+            "sampling needs a positive tolerance and scale and 1 <= min <= max intervals, got {opt:?}"
+        )));
+    }
+    let rib = ribbons(net);
+    let mut intervals = vec![opt.min_intervals; rib.count];
+    let mut edges: Vec<Option<EdgeSamples>> = vec![None; net.edges.len()];
+    let mut patches: Vec<Option<PatchSamples>> = vec![None; net.quads.len()];
+    let mut changed = vec![true; rib.count];
+    let mut rounds = 0;
+    loop {
+        rebuild(
+            net,
+            f,
+            &rib,
+            &intervals,
+            &changed,
+            &mut edges,
+            &mut patches,
+            opt,
+        )?;
+        rounds += 1;
+        if rounds >= opt.max_rounds {
+            break;
+        }
+        // Raise the counts of ribbons whose quads miss the tolerance.
+        let mut need = intervals.clone();
+        for (q, p) in patches.iter().enumerate() {
+            let Some(p) = p else { continue };
+            // A cell-centre miss raises both directions.
+            let du = p.deviation_u.max(p.deviation_cell);
+            let dv = p.deviation_v.max(p.deviation_cell);
+            for (dir, dev, n) in [(0, du, p.s()), (1, dv, p.t())] {
+                if dev > opt.tolerance {
+                    let r = rib.of_quad[q][dir] as usize;
+                    let want = (n as f64 * (dev / opt.tolerance).powf(0.25) * 1.1).ceil() as usize;
+                    need[r] = need[r].max(want.max(n + 1).min(opt.max_intervals));
+                }
+            }
+        }
+        changed = need.iter().zip(&intervals).map(|(a, b)| a != b).collect();
+        intervals = need;
+        if !changed.contains(&true) {
+            break;
+        }
+    }
+    finish(rib, intervals, edges, patches, opt, rounds)
+}
+
+/// Re-samples the edges of the changed ribbons and the quads touching them.
+#[allow(clippy::too_many_arguments)]
+fn rebuild<I: Implicit + ?Sized>(
+    net: &QuadNet,
+    f: &I,
+    rib: &Ribbons,
+    intervals: &[usize],
+    changed: &[bool],
+    edges: &mut [Option<EdgeSamples>],
+    patches: &mut [Option<PatchSamples>],
+    opt: &SampleOptions,
+) -> Result<()> {
+    let tol = 1e-12 * opt.scale;
+    let todo: Vec<usize> = (0..net.edges.len())
+        .filter(|&e| changed[rib.of_edge[e] as usize])
+        .collect();
+    let fresh: Vec<EdgeSamples> = todo
+        .par_iter()
+        .map(|&e| {
+            let [lo, hi] = net.edges[e];
+            let n = intervals[rib.of_edge[e] as usize];
+            let hint = net.edge_quads[e].iter().fold(Vector3::zeros(), |acc, &q| {
+                let p = net.quads[q as usize].map(|k| net.nodes[k as usize]);
+                acc + (p[2] - p[0]).cross(&(p[3] - p[1])).normalize()
+            });
+            sample_edge(
+                f,
+                net.nodes[lo as usize],
+                net.nodes[hi as usize],
+                hint,
+                n,
+                tol,
+            )
+        })
+        .collect::<Result<_>>()?;
+    for (e, s) in todo.into_iter().zip(fresh) {
+        edges[e] = Some(s);
+    }
+    let todo: Vec<usize> = (0..net.quads.len())
+        .filter(|&q| rib.of_quad[q].iter().any(|&r| changed[r as usize]))
+        .collect();
+    let fresh: Vec<PatchSamples> = todo
+        .par_iter()
+        .map(|&q| build_patch(net, f, edges, q, opt))
+        .collect::<Result<_>>()?;
+    for (q, p) in todo.into_iter().zip(fresh) {
+        patches[q] = Some(p);
+    }
+    Ok(())
+}
+
+fn finish(
+    rib: Ribbons,
+    intervals: Vec<usize>,
+    edges: Vec<Option<EdgeSamples>>,
+    patches: Vec<Option<PatchSamples>>,
+    opt: &SampleOptions,
+    rounds: usize,
+) -> Result<PatchSampling> {
+    let edges: Vec<EdgeSamples> = edges
+        .into_iter()
+        .collect::<Option<_>>()
+        .ok_or_else(|| Error::Numerical("an edge was left without samples".into()))?;
+    let patches: Vec<PatchSamples> = patches
+        .into_iter()
+        .collect::<Option<_>>()
+        .ok_or_else(|| Error::Numerical("a quad was left without samples".into()))?;
+    let dev = |p: &PatchSamples| p.deviation();
+    let mut hist = std::collections::BTreeMap::new();
+    for &n in &intervals {
+        *hist.entry(n).or_insert(0usize) += 1;
+    }
+    let report = SampleReport {
+        rounds,
+        ribbons: rib.count,
+        max_deviation: patches.iter().map(dev).fold(0.0, f64::max),
+        over_tolerance: patches.iter().filter(|p| dev(p) > opt.tolerance).count(),
+        grid_points: patches.iter().map(|p| (p.s() + 1) * (p.t() + 1)).sum(),
+        interval_histogram: hist.into_iter().collect(),
+    };
+    Ok(PatchSampling {
+        patches,
+        edges,
+        ribbons: rib,
+        intervals,
+        report,
+    })
+}
+
+/// One side's samples in the patch direction: points, along-side derivatives, normals.
+struct Side {
+    p: Vec<Point3<f64>>,
+    d: Vec<Vector3<f64>>,
+    n: Vec<Vector3<f64>>,
+}
+
+fn side(e: &EdgeSamples, reversed: bool) -> Side {
+    if reversed {
+        Side {
+            p: e.points.iter().rev().copied().collect(),
+            d: e.tangents.iter().rev().map(|t| -t).collect(),
+            n: e.normals.iter().rev().copied().collect(),
+        }
+    } else {
+        Side {
+            p: e.points.clone(),
+            d: e.tangents.clone(),
+            n: e.normals.clone(),
+        }
+    }
+}
+
+fn tangent_part(x: Vector3<f64>, n: &Vector3<f64>) -> Vector3<f64> {
+    x - n * n.dot(&x)
+}
+
+/// Builds the samples of quad `q` from the edge data.
+fn build_patch<I: Implicit + ?Sized>(
+    net: &QuadNet,
+    f: &I,
+    edges: &[Option<EdgeSamples>],
+    q: usize,
+    opt: &SampleOptions,
+) -> Result<PatchSamples> {
+    let [a, b, c, d] = net.quads[q];
+    let qe = net.quad_edges[q];
+    // Patch sides: (net edge, patch walks from -> to).
+    let sides = [
+        PatchSide {
+            edge: qe[0],
+            reversed: a > b,
+        },
+        PatchSide {
+            edge: qe[1],
+            reversed: b > c,
+        },
+        PatchSide {
+            edge: qe[2],
+            reversed: d > c,
+        },
+        PatchSide {
+            edge: qe[3],
+            reversed: a > d,
+        },
+    ];
+    let get = |s: &PatchSide| -> Result<Side> {
+        edges[s.edge as usize]
+            .as_ref()
+            .map(|e| side(e, s.reversed))
+            .ok_or_else(|| Error::Numerical(format!("edge {} has no samples", s.edge)))
+    };
+    let (bot, right, top, left) = (
+        get(&sides[0])?,
+        get(&sides[1])?,
+        get(&sides[2])?,
+        get(&sides[3])?,
+    );
+    let (s, t) = (bot.p.len() - 1, left.p.len() - 1);
+    if top.p.len() != s + 1 || right.p.len() != t + 1 {
+        return Err(Error::Numerical(format!(
+            "quad {q}: opposite sides have different sample counts"
+        )));
+    }
+    let (pu, pv) = (uniform_params(s), uniform_params(t));
+    let (ca, cb, cc, cd) = (bot.p[0], bot.p[s], top.p[s], top.p[0]);
+    // Coons interpolation of the boundary rows, then onto f = 0.
+    let newton = NewtonOptions::new(opt.scale, (cc - ca).norm().max((cd - cb).norm()));
+    let tol = 1e-12 * opt.scale;
+    let mut points = vec![vec![Point3::origin(); t + 1]; s + 1];
+    for (i, col) in points.iter_mut().enumerate() {
+        col[0] = bot.p[i];
+        col[t] = top.p[i];
+    }
+    points[0].copy_from_slice(&left.p);
+    points[s].copy_from_slice(&right.p);
+    let interior: Vec<(usize, usize)> = (1..s).flat_map(|i| (1..t).map(move |j| (i, j))).collect();
+    let solved: Vec<Point3<f64>> = interior
+        .iter()
+        .map(|&(i, j)| {
+            let (u, v) = (pu[i], pv[j]);
+            let coons = |bu: Vector3<f64>,
+                         tu: Vector3<f64>,
+                         lv: Vector3<f64>,
+                         rv: Vector3<f64>,
+                         corners: [Vector3<f64>; 4]| {
+                bu * (1.0 - v) + tu * v + lv * (1.0 - u) + rv * u
+                    - (corners[0] * ((1.0 - u) * (1.0 - v))
+                        + corners[1] * (u * (1.0 - v))
+                        + corners[2] * (u * v)
+                        + corners[3] * ((1.0 - u) * v))
+            };
+            let x = Point3::from(coons(
+                bot.p[i].coords,
+                top.p[i].coords,
+                left.p[j].coords,
+                right.p[j].coords,
+                [ca.coords, cb.coords, cc.coords, cd.coords],
+            ));
+            let n = coons(
+                bot.n[i],
+                top.n[i],
+                left.n[j],
+                right.n[j],
+                [bot.n[0], bot.n[s], top.n[s], top.n[0]],
+            );
+            if let Some(n) = n.try_normalize(1e-12) {
+                if let Ok((sv, _)) = solve_on_line(f, x, n, newton.max_step, tol) {
+                    return Ok(x + n * sv);
+                }
+            }
+            project(f, x, &newton).map(|r| r.0)
+        })
+        .collect::<Result<_>>()?;
+    for (&(i, j), p) in interior.iter().zip(solved) {
+        points[i][j] = p;
+    }
+    // Cross-boundary derivatives: the Coons derivative, in the tangent plane.
+    let mut tan_v0 = Vec::with_capacity(s + 1);
+    let mut tan_v1 = Vec::with_capacity(s + 1);
+    for (i, &u) in pu.iter().enumerate() {
+        let common = (top.p[i] - bot.p[i]) - ((cd - ca) * (1.0 - u) + (cc - cb) * u);
+        let (v0, v1) = if i == 0 {
+            (left.d[0], left.d[t])
+        } else if i == s {
+            (right.d[0], right.d[t])
+        } else {
+            (
+                tangent_part(left.d[0] * (1.0 - u) + right.d[0] * u + common, &bot.n[i]),
+                tangent_part(left.d[t] * (1.0 - u) + right.d[t] * u + common, &top.n[i]),
+            )
+        };
+        tan_v0.push(v0);
+        tan_v1.push(v1);
+    }
+    let mut tan_u0 = Vec::with_capacity(t + 1);
+    let mut tan_u1 = Vec::with_capacity(t + 1);
+    for (j, &v) in pv.iter().enumerate() {
+        let common = (right.p[j] - left.p[j]) - ((cb - ca) * (1.0 - v) + (cc - cd) * v);
+        let (u0, u1) = if j == 0 {
+            (bot.d[0], bot.d[s])
+        } else if j == t {
+            (top.d[0], top.d[s])
+        } else {
+            (
+                tangent_part(bot.d[0] * (1.0 - v) + top.d[0] * v + common, &left.n[j]),
+                tangent_part(bot.d[s] * (1.0 - v) + top.d[s] * v + common, &right.n[j]),
+            )
+        };
+        tan_u0.push(u0);
+        tan_u1.push(u1);
+    }
+    // Tolerance estimate along rows (u), columns (v) and at cell centres.
+    let dist = |p: &Vector3<f64>| {
+        let (val, g) = f.value_and_gradient(&Point3::from(*p));
+        let r = val.abs() / g.norm();
+        if r.is_finite() {
+            r
+        } else {
+            f64::INFINITY
+        }
+    };
+    let max_dist = |v: &[Vector3<f64>]| v.iter().map(dist).fold(0.0, f64::max);
+    let row_mids: Vec<Vec<Vector3<f64>>> = (0..=t)
+        .map(|j| {
+            let row: Vec<Vector3<f64>> = (0..=s).map(|i| points[i][j].coords).collect();
+            spline_midpoints(&row, &pu, &tan_u0[j], &tan_u1[j])
+        })
+        .collect();
+    let deviation_u = row_mids.iter().map(|r| max_dist(r)).fold(0.0, f64::max);
+    let deviation_v = (0..=s)
+        .map(|i| {
+            let col: Vec<Vector3<f64>> = points[i].iter().map(|p| p.coords).collect();
+            max_dist(&spline_midpoints(&col, &pv, &tan_v0[i], &tan_v1[i]))
+        })
+        .fold(0.0, f64::max);
+    // Cell centres: the v-spline through the row midpoints of each column of cells, with end
+    // derivatives interpolated along u from tan_v0 / tan_v1 (end slopes of that interpolation,
+    // the twists, from one-sided differences). The tensor-product patch's value there depends
+    // on how the interpolation treats twists, so this is an estimate.
+    let twist = |d: &[Vector3<f64>], k: usize| (d[k + 1] - d[k]) / (pu[k + 1] - pu[k]);
+    let v0_mid = spline_midpoints(&tan_v0, &pu, &twist(&tan_v0, 0), &twist(&tan_v0, s - 1));
+    let v1_mid = spline_midpoints(&tan_v1, &pu, &twist(&tan_v1, 0), &twist(&tan_v1, s - 1));
+    let deviation_cell = (0..s)
+        .map(|i| {
+            let col: Vec<Vector3<f64>> = row_mids.iter().map(|r| r[i]).collect();
+            max_dist(&spline_midpoints(&col, &pv, &v0_mid[i], &v1_mid[i]))
+        })
+        .fold(0.0, f64::max);
+    Ok(PatchSamples {
+        quad: q,
+        corners: [a, b, c, d],
+        sides,
+        points,
+        params_u: pu,
+        params_v: pv,
+        tan_u0,
+        tan_u1,
+        tan_v0,
+        tan_v1,
+        deviation_u,
+        deviation_v,
+        deviation_cell,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::Aabb;
+    use crate::polygonize::net_smooth::{project_and_smooth, SmoothOptions};
+    use crate::polygonize::test_shapes::*;
+    use crate::polygonize::voxel_net::{build_voxel_net, VoxelNetOptions};
+
+    fn net_on<I: Implicit>(f: &I, seeds: &[Point3<f64>], b: &Aabb, h: f64) -> QuadNet {
+        let mut v = build_voxel_net(f, seeds, b, &VoxelNetOptions::new(h)).unwrap();
+        project_and_smooth(&mut v.net, f, &SmoothOptions::new(b.diagonal(), h)).unwrap();
+        v.net
+    }
+
+    /// The data that fixes a side's boundary curve, in the edge's canonical direction:
+    /// points, parameters, derivative at the lower node, derivative at the higher node.
+    type Boundary = (Vec<Point3<f64>>, Vec<f64>, Vector3<f64>, Vector3<f64>);
+
+    fn boundary(p: &PatchSamples, k: usize) -> Boundary {
+        let (s, t) = (p.s(), p.t());
+        let (pts, params, d0, d1): (Vec<_>, _, _, _) = match k {
+            0 => (
+                (0..=s).map(|i| p.points[i][0]).collect(),
+                p.params_u.clone(),
+                p.tan_u0[0],
+                p.tan_u1[0],
+            ),
+            1 => (
+                p.points[s].clone(),
+                p.params_v.clone(),
+                p.tan_v0[s],
+                p.tan_v1[s],
+            ),
+            2 => (
+                (0..=s).map(|i| p.points[i][t]).collect(),
+                p.params_u.clone(),
+                p.tan_u0[t],
+                p.tan_u1[t],
+            ),
+            _ => (
+                p.points[0].clone(),
+                p.params_v.clone(),
+                p.tan_v0[0],
+                p.tan_v1[0],
+            ),
+        };
+        if p.sides[k].reversed {
+            let rev_params = params.iter().rev().map(|x| 1.0 - x).collect();
+            (pts.into_iter().rev().collect(), rev_params, -d1, -d0)
+        } else {
+            (pts, params, d0, d1)
+        }
+    }
+
+    /// Watertightness, samples on f = 0, G1 at the boundary samples, outward orientation.
+    fn check_network<I: Implicit>(
+        name: &str,
+        f: &I,
+        net: &QuadNet,
+        ps: &PatchSampling,
+        scale: f64,
+    ) {
+        assert_eq!(ps.patches.len(), net.quads.len());
+        // 1. Both quads of every edge see bit-identical boundary data, equal to the edge's.
+        for (e, eq) in net.edge_quads.iter().enumerate() {
+            let mut seen = Vec::new();
+            for &q in eq {
+                let p = &ps.patches[q as usize];
+                let k = p.sides.iter().position(|s| s.edge == e as u32).unwrap();
+                seen.push(boundary(p, k));
+            }
+            assert_eq!(
+                seen[0], seen[1],
+                "{name}: edge {e} differs between its quads"
+            );
+            let ed = &ps.edges[e];
+            assert_eq!(seen[0].0, ed.points);
+            assert_eq!(seen[0].2, ed.tangents[0]);
+            assert_eq!(seen[0].3, *ed.tangents.last().unwrap());
+        }
+        // 2. Every sample on f = 0.
+        let mut worst = 0.0f64;
+        for p in &ps.patches {
+            for row in &p.points {
+                for x in row {
+                    let (v, g) = f.value_and_gradient(x);
+                    worst = worst.max(v.abs() / g.norm());
+                }
+            }
+        }
+        assert!(
+            worst <= 1e-9 * scale,
+            "{name}: sample off the surface by {worst:e}"
+        );
+        // 3. At boundary samples, S_u and S_v lie in the tangent plane and S_u x S_v is the
+        // outward normal.
+        let mut max_tilt = 0.0f64;
+        for p in &ps.patches {
+            let (s, t) = (p.s(), p.t());
+            for k in 0..4 {
+                let ed = &ps.edges[p.sides[k].edge as usize];
+                let n_side = if k % 2 == 0 { s } else { t };
+                for m in 0..=n_side {
+                    let idx = if p.sides[k].reversed { n_side - m } else { m };
+                    let sign = if p.sides[k].reversed { -1.0 } else { 1.0 };
+                    let along = ed.tangents[idx] * sign;
+                    let normal = ed.normals[idx];
+                    let cross = match k {
+                        0 => p.tan_v0[m],
+                        1 => p.tan_u1[m],
+                        2 => p.tan_v1[m],
+                        _ => p.tan_u0[m],
+                    };
+                    let (su, sv) = if k % 2 == 0 {
+                        (along, cross)
+                    } else {
+                        (cross, along)
+                    };
+                    let nrm = su.cross(&sv);
+                    assert!(
+                        nrm.dot(&normal) > 0.0,
+                        "{name}: patch {} side {k} sample {m} folds",
+                        p.quad
+                    );
+                    assert!(
+                        cross.dot(&normal).abs() <= 1e-12 * cross.norm(),
+                        "{name}: cross tangent off the plane"
+                    );
+                    max_tilt = max_tilt.max(nrm.normalize().cross(&normal).norm());
+                }
+            }
+        }
+        assert!(
+            max_tilt < 1e-9,
+            "{name}: patch normal tilts {max_tilt:e} from the implicit's"
+        );
+        eprintln!(
+            "{name}: {} patches, {} ribbons, intervals {:?}, {} rounds, max deviation {:.2e}, {} over tolerance, {} grid points",
+            ps.patches.len(),
+            ps.report.ribbons,
+            ps.report.interval_histogram,
+            ps.report.rounds,
+            ps.report.max_deviation,
+            ps.report.over_tolerance,
+            ps.report.grid_points
+        );
+    }
+
+    #[test]
+    fn sphere_and_torus_patches_are_watertight_and_meet_the_tolerance() {
+        let s = Sphere {
+            c: Point3::new(0.02, -0.01, 0.03),
+            r: 1.0,
+        };
+        let b = aabb([-1.0; 3], [1.0; 3]);
+        let net = net_on(&s, &seeds_on(&s, s.c, 1.2, 10), &b, 0.25);
+        let tol = 1e-4 * b.diagonal();
+        let ps = sample_patches(&net, &s, &SampleOptions::new(tol, b.diagonal())).unwrap();
+        check_network("sphere", &s, &net, &ps, b.diagonal());
+        assert_eq!(ps.report.over_tolerance, 0);
+        assert!(ps.report.max_deviation <= tol);
+        // Same input, same output.
+        let again = sample_patches(&net, &s, &SampleOptions::new(tol, b.diagonal())).unwrap();
+        assert_eq!(again.patches, ps.patches);
+
+        let t = Torus {
+            big: 1.0,
+            small: 0.35,
+        };
+        let b = aabb([-1.35, -1.35, -0.35], [1.35, 1.35, 0.35]);
+        let net = net_on(&t, &seeds_on(&t, Point3::origin(), 1.4, 40), &b, 0.15);
+        let tol = 1e-4 * b.diagonal();
+        let ps = sample_patches(&net, &t, &SampleOptions::new(tol, b.diagonal())).unwrap();
+        check_network("torus", &t, &net, &ps, b.diagonal());
+        assert_eq!(ps.report.over_tolerance, 0);
+        // A tolerance below what the coarse grids reach needs more samples, and gets met.
+        let tight = 0.25 * ps.report.max_deviation;
+        let fine = sample_patches(&net, &t, &SampleOptions::new(tight, b.diagonal())).unwrap();
+        check_network("torus, tight", &t, &net, &fine, b.diagonal());
+        assert!(fine.report.grid_points > ps.report.grid_points);
+        assert!(fine.report.max_deviation <= tight);
+    }
+
+    #[test]
+    fn hard_shapes_give_watertight_samples() {
+        let h = 0.1;
+        let b = aabb([-1.2; 3], [1.2; 3]);
+        let tol = 1e-4 * b.diagonal();
+        let opt = SampleOptions::new(tol, b.diagonal());
+        let dir = Vector3::new(1.0, 1.0, 0.3).normalize();
+        let a = Sphere {
+            c: Point3::origin() - dir * 0.5125,
+            r: 0.5,
+        };
+        let bb = Sphere {
+            c: Point3::origin() + dir * 0.5125,
+            r: 0.5,
+        };
+        let mut seeds = seeds_on(&a, a.c, 0.7, 10);
+        seeds.extend(seeds_on(&bb, bb.c, 0.7, 10));
+        let u = Union(a, bb);
+        let net = net_on(&u, &seeds, &b, h);
+        check_network(
+            "two spheres",
+            &u,
+            &net,
+            &sample_patches(&net, &u, &opt).unwrap(),
+            b.diagonal(),
+        );
+        let c = SoftCube { a: 0.6, k: 0.04 };
+        let net = net_on(&c, &seeds_on(&c, Point3::origin(), 0.8, 30), &b, h);
+        check_network(
+            "soft cube",
+            &c,
+            &net,
+            &sample_patches(&net, &c, &opt).unwrap(),
+            b.diagonal(),
+        );
+        let d = Vector3::new(1.0, 0.2, 0.1).normalize();
+        let db = SmoothUnion {
+            a: Union(
+                Sphere {
+                    c: Point3::origin() - d * 0.6,
+                    r: 0.35,
+                },
+                Sphere {
+                    c: Point3::origin() + d * 0.6,
+                    r: 0.35,
+                },
+            ),
+            b: Capsule {
+                a: Point3::origin() - d * 0.6,
+                b: Point3::origin() + d * 0.6,
+                r: 0.06,
+            },
+            k: 0.05,
+        };
+        let net = net_on(&db, &seeds_on(&db, Point3::origin(), 1.0, 60), &b, h);
+        check_network(
+            "dumbbell",
+            &db,
+            &net,
+            &sample_patches(&net, &db, &opt).unwrap(),
+            b.diagonal(),
+        );
+        let slab = RoundedBox {
+            b: Vector3::new(0.6, 0.45, 0.0),
+            r: 0.03,
+        };
+        let net = net_on(&slab, &seeds_on(&slab, Point3::origin(), 0.7, 60), &b, h);
+        check_network(
+            "thin slab",
+            &slab,
+            &net,
+            &sample_patches(&net, &slab, &opt).unwrap(),
+            b.diagonal(),
+        );
+        let blob = Blob {
+            r: 0.8,
+            amp: 0.04,
+            w: 20.0,
+        };
+        let net = net_on(&blob, &seeds_on(&blob, Point3::origin(), 0.9, 60), &b, h);
+        check_network(
+            "blob",
+            &blob,
+            &net,
+            &sample_patches(&net, &blob, &opt).unwrap(),
+            b.diagonal(),
+        );
+    }
+
+    #[test]
+    fn params_are_reversal_symmetric_and_options_checked() {
+        for n in 1..40 {
+            let p = uniform_params(n);
+            assert_eq!(p[0], 0.0);
+            assert_eq!(p[n], 1.0);
+            for k in 0..=n {
+                assert_eq!(p[n - k], 1.0 - p[k]);
+            }
+        }
+        let s = Sphere {
+            c: Point3::origin(),
+            r: 1.0,
+        };
+        let (nodes, quads) = crate::polygonize::quad_net::tests::cube();
+        let nodes = nodes
+            .iter()
+            .map(|p| Point3::from((p.coords - Vector3::repeat(0.5)).normalize()))
+            .collect();
+        let net = QuadNet::new(nodes, quads).unwrap();
+        assert!(sample_patches(&net, &s, &SampleOptions::new(0.0, 1.0)).is_err());
+        assert!(sample_patches(&net, &s, &SampleOptions::new(f64::NAN, 1.0)).is_err());
+        let ps = sample_patches(&net, &s, &SampleOptions::new(1e-5, 2.0)).unwrap();
+        check_network("cube on sphere", &s, &net, &ps, 2.0);
+    }
+}
