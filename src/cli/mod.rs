@@ -1,6 +1,7 @@
 //! The `scansurf` command line: clap subcommands that parse, call the library and print.
 //! No algorithms live here.
 
+mod fit;
 mod inspect;
 pub mod progress;
 mod reconstruct;
@@ -22,6 +23,12 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Fit a sewn network of bicubic B-spline patches to a point cloud or mesh and write STEP
+    /// (and IGES), with a report of the deviation and continuity it reached.
+    #[command(
+        after_help = "Examples:\n  scansurf fit scan.ply -o part.step --iges part.igs --report part.json\n  scansurf fit bunny.obj -o bunny.step --patches 800 --preview bunny.png\n  scansurf fit cloud.xyz -o out.step --patch-size 5 --tolerance 5e-5"
+    )]
+    Fit(fit::Args),
     /// Count points, faces, components, holes and defects of a mesh or point cloud.
     #[command(
         after_help = "Example:\n  scansurf inspect scan.ply\n  scansurf inspect bunny.obj --json > bunny.json"
@@ -56,6 +63,7 @@ pub fn run() -> i32 {
         }
     };
     let result = match cli.command {
+        Command::Fit(a) => fit::run(a, cli.quiet),
         Command::Inspect(a) => inspect::run(a, cli.quiet),
         Command::Smooth(a) => smooth::run(a, cli.quiet),
         Command::Render(a) => render::run(a, cli.quiet),

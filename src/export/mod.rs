@@ -46,6 +46,22 @@ impl LengthUnit {
     }
 }
 
+impl std::str::FromStr for LengthUnit {
+    type Err = Error;
+    /// `mm`, `cm`, `m` or `um` (also `µm` and the full names).
+    fn from_str(s: &str) -> Result<LengthUnit> {
+        match s.to_ascii_lowercase().as_str() {
+            "mm" | "millimetre" | "millimeter" => Ok(LengthUnit::Millimetre),
+            "cm" | "centimetre" | "centimeter" => Ok(LengthUnit::Centimetre),
+            "m" | "metre" | "meter" => Ok(LengthUnit::Metre),
+            "um" | "µm" | "micrometre" | "micrometer" => Ok(LengthUnit::Micrometre),
+            other => Err(Error::InvalidOption(format!(
+                "unknown unit '{other}': expected mm, cm, m or um"
+            ))),
+        }
+    }
+}
+
 /// A UTC date and time for file headers. Writers never read the clock: the caller passes the
 /// time (e.g. [`Timestamp::from_unix_seconds`] of `SystemTime::now()`), and without one the
 /// files carry the fixed [`Timestamp::EPOCH`], so output is reproducible.

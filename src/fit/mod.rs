@@ -9,6 +9,8 @@
 //! - [`samples`]: the per-patch grids, their counts chosen from `--tolerance`.
 
 pub mod edge_curve;
+pub mod net;
+pub mod pipeline;
 pub mod ribbons;
 pub mod samples;
 pub mod spline_check;

@@ -687,6 +687,37 @@ pub fn write(w: &mut dyn Write, mesh: &Mesh, ascii: bool) -> std::io::Result<()>
     Ok(())
 }
 
+/// Writes points with a scalar per point (e.g. deviation) as binary little-endian PLY: double
+/// x y z, float `quality` (the name MeshLab and CloudCompare show as a scalar field) and uchar
+/// red green blue from `colors`, for viewing the scalar in those tools.
+pub fn write_scalar_cloud(
+    w: &mut dyn Write,
+    points: &[Point3<f64>],
+    values: &[f64],
+    colors: &[[u8; 3]],
+) -> std::io::Result<()> {
+    if values.len() != points.len() || colors.len() != points.len() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "one value and one colour per point needed",
+        ));
+    }
+    write!(
+        w,
+        "ply\nformat binary_little_endian 1.0\ncomment written by scansurf {}\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\nproperty float quality\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n",
+        env!("CARGO_PKG_VERSION"),
+        points.len()
+    )?;
+    for ((p, v), c) in points.iter().zip(values).zip(colors) {
+        for x in p.iter() {
+            w.write_all(&x.to_le_bytes())?;
+        }
+        w.write_all(&(*v as f32).to_le_bytes())?;
+        w.write_all(c)?;
+    }
+    Ok(())
+}
+
 /// Writes a binary PLY whose triangles are stored as one `tristrips` element (each triangle a
 /// strip of three, separated by -1), as some scanners' software does. For fixtures and tests.
 pub fn write_tristrips(w: &mut dyn Write, mesh: &Mesh, big_endian: bool) -> std::io::Result<()> {

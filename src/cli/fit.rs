@@ -1,0 +1,212 @@
+//! `scansurf fit INPUT -o OUT.step [--iges OUT.igs] [--report R.json] [--patches N | --patch-size L]
+//! [--tolerance T] [--smooth N] [--deviation-ply D.ply] [--preview P.png]`.
+
+use crate::error::{Error, Result};
+use crate::export::{ExportOptions, LengthUnit, Timestamp};
+use crate::fit::net::PatchSize;
+use crate::fit::pipeline::{fit, FitOptions};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Point cloud or triangle mesh (.ply .obj .stl .xyz .txt .pts .csv .e57 .las .laz).
+    pub input: PathBuf,
+    /// STEP file to write (AP214; a closed shell as a solid, else an open shell).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also write IGES 5.3 (entity 128 per patch) here.
+    #[arg(long, value_name = "OUT.igs")]
+    pub iges: Option<PathBuf>,
+    /// Write the quality report (deviation, continuity, patch counts, timings) as JSON here.
+    #[arg(long, value_name = "R.json")]
+    pub report: Option<PathBuf>,
+    /// About this many patches (within 15%).
+    #[arg(long, value_name = "N", conflicts_with = "patch_size")]
+    pub patches: Option<usize>,
+    /// Patch edge length in model units (the voxel size of the quad net).
+    #[arg(long, value_name = "L")]
+    pub patch_size: Option<f64>,
+    /// Largest distance of the patches from the fitted surface, as a fraction of the bounding-box
+    /// diagonal.
+    #[arg(long, default_value_t = 1e-4, value_name = "T")]
+    pub tolerance: f64,
+    /// Fitting tolerance of the implicit surface at the input points (fraction of the diagonal).
+    #[arg(long, default_value_t = 2e-4)]
+    pub fit_tolerance: f64,
+    /// How holes in a mesh input are closed: `implicit` (the fitted implicit surface closes them
+    /// smoothly, seed 003) or `none` (same; listed for scripts that want to say so explicitly).
+    #[arg(long, default_value = "implicit")]
+    pub fill_holes: String,
+    /// Anisotropic smoothing iterations on a mesh input before fitting (0 = none).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub smooth: usize,
+    /// Write the input points coloured by their distance from the patches (PLY, scalar
+    /// `quality` + RGB), for MeshLab or CloudCompare.
+    #[arg(long, value_name = "D.ply")]
+    pub deviation_ply: Option<PathBuf>,
+    /// Write a rendered picture of the patch network with its patch boundaries.
+    #[arg(long, value_name = "P.png")]
+    pub preview: Option<PathBuf>,
+    /// Subsample point clouds above this many points (voxel grid) on read.
+    #[arg(long)]
+    pub max_points: Option<usize>,
+    /// Unit of the input coordinates, declared in STEP/IGES: mm, cm, m or um.
+    #[arg(long, default_value = "mm")]
+    pub unit: String,
+    /// Header time stamp (ISO 8601, e.g. 2026-11-22T10:00:00). Default: SOURCE_DATE_EPOCH if
+    /// set, else 1970-01-01T00:00:00, so the same input gives byte-identical files.
+    #[arg(long)]
+    pub timestamp: Option<String>,
+}
+
+fn check_ext(path: &Path, allowed: &[&str], what: &str) -> Result<()> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    if allowed.contains(&ext.as_str()) {
+        Ok(())
+    } else {
+        Err(Error::unsupported(
+            path,
+            format!("{what} must end in {}", allowed.join(" or ")),
+        ))
+    }
+}
+
+fn timestamp(a: &Args) -> Result<Option<Timestamp>> {
+    if let Some(t) = &a.timestamp {
+        return Timestamp::parse_iso8601(t).map(Some);
+    }
+    match std::env::var("SOURCE_DATE_EPOCH") {
+        Ok(s) => {
+            let secs: u64 = s.trim().parse().map_err(|_| {
+                Error::InvalidOption(format!("SOURCE_DATE_EPOCH={s} is not a number"))
+            })?;
+            Ok(Some(Timestamp::from_unix_seconds(secs)))
+        }
+        Err(_) => Ok(None),
+    }
+}
+
+pub fn run(a: Args, quiet: bool) -> Result<()> {
+    check_ext(&a.output, &["step", "stp"], "the STEP output")?;
+    if let Some(i) = &a.iges {
+        check_ext(i, &["igs", "iges"], "the IGES output")?;
+    }
+    if let Some(p) = &a.preview {
+        check_ext(p, &["png"], "the preview")?;
+    }
+    if let Some(p) = &a.deviation_ply {
+        check_ext(p, &["ply"], "the deviation cloud")?;
+    }
+    if !matches!(a.fill_holes.as_str(), "implicit" | "none") {
+        return Err(Error::InvalidOption(format!(
+            "--fill-holes {}: expected implicit or none",
+            a.fill_holes
+        )));
+    }
+    let unit: LengthUnit = a.unit.parse()?;
+    let stamp = timestamp(&a)?;
+    let size = match (a.patches, a.patch_size) {
+        (Some(n), _) if n == 0 => {
+            return Err(Error::InvalidOption("--patches must be at least 1".into()))
+        }
+        (Some(n), _) => PatchSize::Count(n),
+        (None, Some(l)) => PatchSize::Edge(l),
+        (None, None) => PatchSize::Count(crate::fit::net::DEFAULT_PATCHES),
+    };
+
+    let mut input = crate::io::read_mesh(&a.input)?;
+    if let Some(max) = a.max_points {
+        input = crate::mesh::subsample::limit_points(input, max)?;
+    }
+    if a.smooth > 0 {
+        if input.faces.is_empty() {
+            return Err(Error::InvalidOption(
+                "--smooth needs a mesh input; point clouds are smoothed by the implicit fit".into(),
+            ));
+        }
+        let adj = crate::smooth::Adjacency::build(&input)?;
+        let method = crate::smooth::Method::by_name("anisotropic")?.with_iterations(a.smooth);
+        crate::smooth::run(&mut input, &adj, &method, None, &Default::default())?;
+    }
+    let mut opts = FitOptions {
+        size,
+        tolerance: a.tolerance,
+        ..FitOptions::default()
+    };
+    opts.implicit.tolerance = a.fit_tolerance;
+
+    let bar = super::progress::bar("fit", 100, quiet);
+    let mut progress = |stage: &str, frac: f64| {
+        bar.set_prefix(stage.to_string());
+        bar.set_position((frac.clamp(0.0, 1.0) * 100.0) as u64);
+    };
+    let (network, report) =
+        fit(&input, &opts, &mut progress).map_err(|e| super::with_input(e, &a.input))?;
+    bar.finish_and_clear();
+
+    let name = |p: &Path| {
+        p.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "scansurf".into())
+    };
+    let export = |p: &Path| ExportOptions {
+        name: name(p),
+        timestamp: stamp,
+        unit,
+        tolerance: (report.tolerance).max(report.bbox_diagonal * 1e-7),
+        ..ExportOptions::default()
+    };
+    // Both texts are made before either file is written, so an export error leaves no file.
+    let step = crate::export::step_string(&network, &export(&a.output))?;
+    let iges = match &a.iges {
+        Some(i) => Some(crate::export::iges_string(&network, &export(i))?),
+        None => None,
+    };
+    crate::io::write_atomic(&a.output, |w| w.write_all(step.as_bytes()))?;
+    if let (Some(i), Some(text)) = (&a.iges, &iges) {
+        crate::io::write_atomic(i, |w| w.write_all(text.as_bytes()))?;
+    }
+    if let Some(r) = &a.report {
+        super::write_json(r, &report)?;
+    }
+    let (pts, _) = input.referenced_points();
+    if let Some(d) = &a.deviation_ply {
+        let dist = &report.deviation.distances;
+        let scale = crate::render::ColorScale::auto(dist)?;
+        let colors: Vec<[u8; 3]> = dist.iter().map(|&v| scale.map.srgb8(scale.t(v))).collect();
+        crate::io::write_atomic(d, |w| {
+            crate::io::ply::write_scalar_cloud(w, &pts, dist, &colors)
+        })?;
+    }
+    if let Some(p) = &a.preview {
+        let (mesh, lines) = crate::nurbs::tessellate::tessellate(&network, 8);
+        let img = crate::render::render_mesh(
+            &mesh,
+            None,
+            &lines,
+            &crate::render::RenderOptions::default(),
+        )?;
+        img.save_png(p)?;
+    }
+    if !quiet {
+        let dev = &report.deviation.stats.relative;
+        eprintln!(
+            "fitted {} -> {}: {} patches, {}, deviation mean {:.2e} p99 {:.2e} max {:.2e} of the diagonal, normal jump p95 {:.2} max {:.2} deg, {:.1} s",
+            a.input.display(),
+            a.output.display(),
+            report.patches,
+            if report.closed { "closed" } else { "open" },
+            dev.mean,
+            dev.p99,
+            dev.max,
+            report.continuity.all_deg.p95,
+            report.continuity.all_deg.max,
+            report.timings.total
+        );
+    }
+    Ok(())
+}

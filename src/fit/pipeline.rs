@@ -1,0 +1,202 @@
+//! The whole `fit` pipeline (seed 004, Fig. 2): oriented points -> partition-of-unity implicit
+//! (eq. 1-3) -> voxel quad net, projected and smoothed on the implicit -> per-quad sample grids
+//! with shared edge data -> one bicubic patch per quad by interpolation with clamped end
+//! tangents (eq. 9-14) -> a sewn patch network, measured: deviation of the input points from the
+//! patches by point inversion, normal jump across shared edges, quad quality, timings.
+
+use super::net::{fit_net, NetReport, PatchSize};
+use super::samples::{sample_patches, SampleOptions, SampleReport};
+use crate::implicit::pou::{FitOptions as ImplicitOptions, FitStats, PouImplicit};
+use crate::mesh::{Aabb, Mesh};
+use crate::normals::{oriented_points, NormalSource};
+use crate::nurbs::{BSplineSurface, Params, PatchGrid, PatchInput, PatchNetwork, Twist};
+use crate::quality::{deviation_from_patches, normal_jumps, ContinuityReport, PatchDeviation};
+use crate::{Error, Result};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Options of [`fit`], with the CLI's defaults.
+#[derive(Debug, Clone)]
+pub struct FitOptions {
+    /// Patch count or patch edge (default about 1,500 patches).
+    pub size: PatchSize,
+    /// Largest distance of the patches from the implicit, as a fraction of the bounding-box
+    /// diagonal (default 1e-4).
+    pub tolerance: f64,
+    /// The implicit's own fitting options.
+    pub implicit: ImplicitOptions,
+    /// Neighbours for normal estimation and repair (default 12).
+    pub normal_neighbours: usize,
+    /// Samples per shared edge for the normal-jump measurement (default 5, as cad_check).
+    pub jump_samples: usize,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            size: PatchSize::Count(super::net::DEFAULT_PATCHES),
+            tolerance: 1e-4,
+            implicit: ImplicitOptions::default(),
+            normal_neighbours: 12,
+            jump_samples: 5,
+        }
+    }
+}
+
+/// Seconds per stage.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct FitTimings {
+    pub normals: f64,
+    pub implicit: f64,
+    pub net: f64,
+    pub sampling: f64,
+    pub patches: f64,
+    pub deviation: f64,
+    pub continuity: f64,
+    pub total: f64,
+}
+
+/// What `fit` made and how good it is: the JSON of `--report`.
+#[derive(Debug, Clone, Serialize)]
+pub struct FitReport {
+    pub input_points: usize,
+    pub normal_source: NormalSource,
+    pub normals_flipped: usize,
+    pub normals_estimated: usize,
+    pub bbox_diagonal: f64,
+    /// Tolerance asked for, absolute (model units).
+    pub tolerance: f64,
+    pub implicit: FitStats,
+    pub net: NetReport,
+    pub sampling: SampleReport,
+    pub patches: usize,
+    pub control_points: usize,
+    /// Control points per patch: min, max.
+    pub control_points_per_patch: [usize; 2],
+    pub shared_edges: usize,
+    pub free_edges: usize,
+    pub closed: bool,
+    /// Deviation of the input points from the patch surfaces (point inversion).
+    pub deviation: PatchDeviation,
+    /// Normal jump across shared patch edges, in degrees.
+    pub continuity: ContinuityReport,
+    pub timings: FitTimings,
+}
+
+/// Fits a patch network to a point cloud or mesh. `progress(stage, fraction)` is called as
+/// stages start.
+pub fn fit(
+    input: &Mesh,
+    opts: &FitOptions,
+    progress: &mut dyn FnMut(&str, f64),
+) -> Result<(PatchNetwork, FitReport)> {
+    if !(opts.tolerance > 0.0 && opts.tolerance.is_finite()) {
+        return Err(Error::InvalidOption(format!(
+            "tolerance must be a positive fraction of the diagonal, got {}",
+            opts.tolerance
+        )));
+    }
+    let t_all = Instant::now();
+    let mut timings = FitTimings::default();
+
+    progress("normals", 0.0);
+    let t = Instant::now();
+    let op = oriented_points(input, opts.normal_neighbours)?;
+    timings.normals = t.elapsed().as_secs_f64();
+
+    progress("implicit", 0.05);
+    let t = Instant::now();
+    let f = PouImplicit::fit(&op.points, &op.normals, &opts.implicit)?;
+    timings.implicit = t.elapsed().as_secs_f64();
+    let diag = f.diagonal();
+    let bounds = Aabb::of(&op.points).ok_or_else(|| Error::Degenerate("no points".into()))?;
+
+    progress("quad net", 0.3);
+    let t = Instant::now();
+    let (net, net_report) = fit_net(&f, &op.points, &bounds, opts.size)?;
+    timings.net = t.elapsed().as_secs_f64();
+
+    progress("sampling", 0.5);
+    let t = Instant::now();
+    let tol = opts.tolerance * diag;
+    let sampling = sample_patches(&net, &f, &SampleOptions::new(tol, diag))?;
+    timings.sampling = t.elapsed().as_secs_f64();
+
+    progress("patches", 0.7);
+    let t = Instant::now();
+    let inputs: Vec<PatchInput> = sampling
+        .patches
+        .par_iter()
+        .map(|s| {
+            let grid = PatchGrid {
+                points: s.points.clone(),
+                du_u0: s.tan_u0.clone(),
+                du_u1: s.tan_u1.clone(),
+                dv_v0: s.tan_v0.clone(),
+                dv_v1: s.tan_v1.clone(),
+                twist: Twist::Estimate,
+            };
+            let surface = BSplineSurface::interpolate_grid(
+                &grid,
+                &Params::new(&s.params_u)?,
+                &Params::new(&s.params_v)?,
+            )?;
+            Ok(PatchInput {
+                surface,
+                corners: s.corners,
+                // Quads are counter-clockwise seen from outside, corners (0,0), (1,0), (1,1),
+                // (0,1): S_u x S_v points out.
+                same_sense: true,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let network = PatchNetwork::from_patches(net.nodes.clone(), inputs)?;
+    timings.patches = t.elapsed().as_secs_f64();
+
+    progress("deviation", 0.85);
+    let t = Instant::now();
+    let (pts, _) = input.referenced_points();
+    let deviation = deviation_from_patches(&network, &pts, diag);
+    timings.deviation = t.elapsed().as_secs_f64();
+
+    progress("continuity", 0.95);
+    let t = Instant::now();
+    let continuity = normal_jumps(&network, opts.jump_samples);
+    timings.continuity = t.elapsed().as_secs_f64();
+    timings.total = t_all.elapsed().as_secs_f64();
+
+    let counts: Vec<usize> = network
+        .faces
+        .iter()
+        .map(|f| {
+            let (a, b) = f.surface.ctrl_dims();
+            a * b
+        })
+        .collect();
+    let uses = network.edge_use_counts();
+    let report = FitReport {
+        input_points: pts.len(),
+        normal_source: op.source,
+        normals_flipped: op.flipped,
+        normals_estimated: op.estimated,
+        bbox_diagonal: diag,
+        tolerance: tol,
+        implicit: f.stats().clone(),
+        net: net_report,
+        sampling: sampling.report.clone(),
+        patches: network.faces.len(),
+        control_points: counts.iter().sum(),
+        control_points_per_patch: [
+            counts.iter().copied().min().unwrap_or(0),
+            counts.iter().copied().max().unwrap_or(0),
+        ],
+        shared_edges: uses.iter().filter(|&&u| u == 2).count(),
+        free_edges: uses.iter().filter(|&&u| u == 1).count(),
+        closed: network.closed,
+        deviation,
+        continuity,
+        timings,
+    };
+    Ok((network, report))
+}
