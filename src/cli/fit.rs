@@ -110,7 +110,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     let unit: LengthUnit = a.unit.parse()?;
     let stamp = timestamp(&a)?;
     let size = match (a.patches, a.patch_size) {
-        (Some(n), _) if n == 0 => {
+        (Some(0), _) => {
             return Err(Error::InvalidOption("--patches must be at least 1".into()))
         }
         (Some(n), _) => PatchSize::Count(n),
