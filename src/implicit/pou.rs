@@ -428,8 +428,11 @@ impl Builder<'_> {
             return false;
         };
         let fr = &hp.frame;
-        // Natural gaps between samples are up to about the sampling radius.
-        let gap = (0.25 * cube.size).max(self.sampling_radius(&cube.center()));
+        // Natural gaps between samples are below a few point spacings (the nearest-neighbour
+        // distance, which stays small along the rim of a hole).
+        let (i, _) = self.kd.nearest(&cube.center());
+        let spacing = self.kd.knn(&self.pts[i], 2).get(1).map_or(0.0, |x| x.1);
+        let gap = (0.25 * cube.size).max(2.5 * spacing);
         let half = 0.5 * cube.size * 3f64.sqrt() / fr.scale;
         let c = fr.local(&cube.center());
         const N: usize = 6;
@@ -591,8 +594,8 @@ impl Builder<'_> {
         if empty {
             // A hole (or the space beside the surface): widen the fit set until it surrounds the
             // cell, reaching across the hole rather than only to its nearest edge. Only points
-            // facing like the nearest ones count (the rim of a hole in a flat base, not the
-            // walls rising beside it).
+            // facing the same way as the nearest ones count (the rim of a hole in a flat base,
+            // not the far side of a thin part).
             let nref: Vector3<f64> = self
                 .kd
                 .knn(&c, o.min_points)
@@ -602,13 +605,26 @@ impl Builder<'_> {
             let nref = nref.try_normalize(1e-12).unwrap_or_else(Vector3::zeros);
             let facing = |idx: Vec<usize>| -> Vec<usize> {
                 idx.into_iter()
-                    .filter(|&i| self.nrm[i].dot(&nref) > 0.5)
+                    .filter(|&i| self.nrm[i].dot(&nref) > 0.0)
                     .collect()
             };
             idx = facing(idx);
-            while (idx.len() < 3 * o.min_points || !self.surrounds(&idx, &c)) && h < limit {
+            // A hole wider than a few times the distance to its nearest rim is not bridged
+            // better by looking farther.
+            let near = self.kd.nearest(&c).1;
+            let hole_limit = limit.min(h0 + 6.0 * near);
+            while (idx.len() < 3 * o.min_points || !self.surrounds(&idx, &c)) && h < hole_limit {
                 h *= 1.25;
                 idx = facing(self.in_box(&c, h));
+            }
+            // Bridge with the rim points nearest to the cell (seed 000: the hole's boundary and
+            // its neighbourhood), not with the whole grown box, whose far parts only distort.
+            let keep = 3 * o.min_points;
+            if idx.len() > keep {
+                let d2 = |i: &usize| (self.pts[*i] - c).norm_squared();
+                idx.select_nth_unstable_by(keep - 1, |a, b| d2(a).total_cmp(&d2(b)).then(a.cmp(b)));
+                idx.truncate(keep);
+                idx.sort_unstable();
             }
         }
         let p: Vec<Point3<f64>> = idx.iter().map(|&i| self.pts[i]).collect();
@@ -621,11 +637,7 @@ impl Builder<'_> {
         };
         let mut best: Option<LocalFit> = None;
         // Empty cells only extrapolate: a looser tolerance, and the lowest degree meeting it.
-        let tol = if empty {
-            (10.0 * self.tol).max(0.02 * h)
-        } else {
-            self.tol
-        };
+        let tol = if empty { 10.0 * self.tol } else { self.tol };
         if let Some(frame) = local::height_frame(&p, &n, &params) {
             for degree in [Degree::Quadratic, Degree::Cubic] {
                 let fit = local::fit_poly(&p, &n, frame, degree);
