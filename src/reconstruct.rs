@@ -277,7 +277,10 @@ pub(crate) mod tests {
                             let (su, cu) = u.sin_cos();
                             let (sv, cv) = v.sin_cos();
                             // Missing patch on the outer equator around u = 0.
-                            if hole && (u < 0.2 || u > std::f64::consts::TAU - 0.2) && cv > 0.95 {
+                            if hole
+                                && !(0.2..=std::f64::consts::TAU - 0.2).contains(&u)
+                                && cv > 0.95
+                            {
                                 continue;
                             }
                             let d = Vector3::new(cv * cu, cv * su, sv);
