@@ -23,14 +23,15 @@ use std::time::Instant;
 pub struct ReconstructOptions {
     /// Options of the implicit fit.
     pub fit: FitOptions,
-    /// Marching-cubes cube edge as a multiple of the mean point spacing (default 1.0).
+    /// Marching-cubes cube edge as a multiple of the typical point spacing (default 1.5; the
+    /// refinement then subdivides where the tolerance asks for it).
     pub resolution: f64,
     /// Absolute cube edge; overrides `resolution` when set.
     pub cell_size: Option<f64>,
     /// Relaxation rounds after marching cubes (default 2).
     pub relax_iterations: usize,
-    /// Largest gap between the mesh and the implicit at triangle centroids and edge midpoints
-    /// (99th percentile over the triangles), as a fraction of the bounding-box diagonal; `None`
+    /// Largest gap between the mesh and the implicit at triangle centroids (99th percentile over
+    /// the triangles), as a fraction of the bounding-box diagonal; `None`
     /// (the default) means three times the fit tolerance.
     pub tolerance: Option<f64>,
     /// At most this many 1-to-4 subdivisions (default 2).
@@ -45,7 +46,7 @@ impl Default for ReconstructOptions {
     fn default() -> Self {
         ReconstructOptions {
             fit: FitOptions::default(),
-            resolution: 1.0,
+            resolution: 1.5,
             cell_size: None,
             relax_iterations: 2,
             tolerance: None,
@@ -94,16 +95,20 @@ pub struct ReconstructReport {
     pub timings: Timings,
 }
 
-/// Mean distance from each point to its nearest other point.
+/// Typical point spacing: the mean over the points of the distance to their 8th nearest
+/// neighbour divided by sqrt(8 / pi) (for an even sampling of a surface with spacing s, k
+/// neighbours fill a disc of radius s sqrt(k / pi)). Less sensitive to jitter and clustering than
+/// the nearest-neighbour distance.
 pub fn mean_spacing(points: &[nalgebra::Point3<f64>], kd: &crate::spatial::KdTree) -> f64 {
-    if points.len() < 2 {
+    const K: usize = 8;
+    if points.len() <= K {
         return 0.0;
     }
     let s: Vec<f64> = points
         .par_iter()
-        .map(|p| kd.knn(p, 2).get(1).map_or(0.0, |x| x.1))
+        .map(|p| kd.knn(p, K + 1).last().map_or(0.0, |x| x.1))
         .collect();
-    s.iter().sum::<f64>() / s.len() as f64
+    s.iter().sum::<f64>() / s.len() as f64 / (K as f64 / std::f64::consts::PI).sqrt()
 }
 
 /// Reconstructs a closed mesh from a mesh (its referenced vertices and face normals) or a point
@@ -170,7 +175,7 @@ pub fn reconstruct(
         tolerance: mesh_tol * diag,
         quantile: 0.99,
         max_levels: opts.max_subdivisions,
-        relax_iterations: 1,
+        relax_iterations: 0,
     };
     let (mesh, refine_report) = refine(mesh, &f, &ropts, &proj);
     timings.refine = t.elapsed().as_secs_f64();
