@@ -381,47 +381,24 @@ mod debug_tests {
     #[ignore]
     fn torus_hole() {
         let t = Shape::Torus(1.0, 0.35);
-        let c = t.sample(6000, 0.0, true);
+        let c = t.sample(6000, 1e-3, false);
+        let (mesh, rep) = reconstruct(&c, &ReconstructOptions::default(), &mut |_, _| {}).unwrap();
         let op = oriented_points(&c, 12).unwrap();
         let f = PouImplicit::fit(&op.points, &op.normals, &FitOptions::default()).unwrap();
-        let cell = &f.cells()[196];
-        if let crate::implicit::local::LocalFunction::Poly(hp) = &cell.function {
-            let size = 2.0 * cell.half.x / 1.1;
-            let cube = crate::spatial::Cube {
-                min: cell.center - nalgebra::Vector3::repeat(size / 2.0),
-                size,
-            };
-            let fr = &hp.frame;
-            let half = 0.5 * cube.size * 3f64.sqrt() / fr.scale;
-            let c = fr.local(&cube.center());
-            println!("frame w {:?} scale {}", fr.w, fr.scale);
-            let (i, _) = f.kdtree().nearest(&cube.center());
+        println!("{:?}", rep.fit);
+        let mut worst: Vec<(f64, Point3<f64>)> = mesh
+            .positions
+            .iter()
+            .map(|p| (t.distance(p).abs(), *p))
+            .collect();
+        worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+        for (d, x) in &worst[..3] {
             println!(
-                "sampling radius {:?} nearest {:?}",
-                f.kdtree().knn(&f.points().0[i], 20).last(),
-                f.points().0[i]
+                "x {x:?} err {d:.3e} F {:.3e} near {:.3e}",
+                f.value(x),
+                f.kdtree().nearest(x).1
             );
-            for i in 0..6 {
-                for j in 0..6 {
-                    let u = c.x + half * (2.0 * (i as f64 + 0.5) / 6.0 - 1.0);
-                    let v = c.y + half * (2.0 * (j as f64 + 0.5) / 6.0 - 1.0);
-                    let x = hp.surface_point(u, v);
-                    println!(
-                        "  {i}{j} {:?} inside {} near {:.3}",
-                        x,
-                        cube.contains(&x),
-                        f.kdtree().nearest(&x).1
-                    );
-                }
-            }
-        }
-        for x in [
-            Point3::new(1.35, 0.0, 0.0),
-            Point3::new(1.34, 0.1, 0.05),
-            Point3::new(1.3, 0.0, 0.15),
-        ] {
-            println!("x {x:?} F {:.4e} true {:.4e}", f.value(&x), t.distance(&x));
-            for (l, w, v) in f.contributions(&x) {
+            for (l, w, v) in f.contributions(x) {
                 let cell = &f.cells()[l];
                 println!("   cell {l} {:?} c={:?} w={w:.3e} f={v:.3e} n={} res={:.2e} h={:.4} pr={} ok={}", cell.function.kind(), cell.center, cell.support_points, cell.max_residual, cell.half.x, cell.priority, cell.meets_tolerance);
             }

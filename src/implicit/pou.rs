@@ -34,8 +34,9 @@ use nalgebra::{Point3, Vector3};
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct FitOptions {
     /// Largest accepted |f| at a domain's points, as a fraction of the bounding-box diagonal
-    /// (default 2e-4, about the noise of a good scan). Domains that miss it are split (or, when
-    /// too small to split, use an RBF, which interpolates).
+    /// (default 2e-4, about the noise of a good scan; raised to the estimated noise of the
+    /// points when that is larger). Domains that miss it are split; when too small to split
+    /// they keep a polynomial within 1.5 times the tolerance, or else use an RBF.
     pub tolerance: f64,
     /// A domain whose support holds more points is split (default 120; seed 003: 30-300).
     pub max_points: usize,
@@ -96,6 +97,10 @@ impl FitOptions {
 /// What the fit produced.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct FitStats {
+    /// Estimated scatter of the points about the surface (rms), relative to the diagonal.
+    pub noise: f64,
+    /// The tolerance used: the requested one, raised to the noise if that is larger.
+    pub tolerance: f64,
     pub points: usize,
     pub cells: usize,
     pub linear: usize,
@@ -144,6 +149,10 @@ pub struct PouImplicit {
 /// Weight factor of cells without points in their support (holes, empty space): they decide F
 /// only where no fitted cell reaches.
 const EXTRAPOLATION_PRIORITY: f64 = 1e-12;
+
+/// A domain too small to split keeps a polynomial whose residual is within this many times the
+/// tolerance (the misfit is noise there).
+const LEAF_FACTOR: f64 = 1.5;
 
 /// Seed 003 eq. 7b and its derivative dW/dd.
 #[inline]
@@ -196,7 +205,10 @@ impl PouImplicit {
         }
         let kd = KdTree::build(&pts)?;
         let root = Cube::around(&bbox, 0.1);
-        let tol = opts.tolerance * diagonal;
+        // The tolerance is never below the points' own scatter (see `noise`): asking more only
+        // splits domains until they interpolate the noise.
+        let noise = super::noise::estimate_noise(&pts, &nrm, &kd, opts.min_points, 2000);
+        let tol = (opts.tolerance * diagonal).max(noise);
         let builder = Builder {
             pts: &pts,
             nrm: &nrm,
@@ -207,6 +219,8 @@ impl PouImplicit {
         };
         let tree = Octree::build(root, &pts, opts.max_depth, |c| builder.decide(c));
         let mut stats = FitStats {
+            noise: noise / diagonal,
+            tolerance: tol / diagonal,
             points: pts.len(),
             cells: tree.payloads().len(),
             diagonal,
@@ -683,7 +697,16 @@ impl Builder<'_> {
         {
             return Decision::Split;
         }
-        // Too small to split: an RBF through the (sub-sampled) support.
+        // Too small to split. A polynomial within a few times the tolerance is kept: what it
+        // misses at this size is noise, which a least-squares fit smooths and an interpolating
+        // RBF would follow with wiggles. Otherwise (folds, sharp features) an RBF through the
+        // (sub-sampled) support.
+        if best
+            .as_ref()
+            .is_some_and(|f| f.max_residual <= LEAF_FACTOR * self.tol && f.normal_agreement >= 1.0)
+        {
+            return self.leaf(c, h0, p.len(), best.unwrap_or_else(|| unreachable!()));
+        }
         best = local::better(best, self.rbf(&p, &n, &params), self.tol);
         if best.is_none() {
             // Last resort: a plane-like height function along the mean normal.

@@ -326,7 +326,7 @@ pub fn marching_cubes<F: Implicit + ?Sized>(
     }
     drop(values);
     drop(visited);
-    active.sort_unstable_by(|a, b| a.0.cmp(&b.0));
+    active.sort_unstable_by_key(|a| a.0);
 
     let mut mesh = Mesh::default();
     let mut vert: IntMap<(u64, u8), u32> = IntMap::default();
