@@ -51,7 +51,7 @@ impl Default for ReconstructOptions {
             relax_iterations: 2,
             tolerance: None,
             max_subdivisions: 2,
-            normal_neighbours: 12,
+            normal_neighbours: crate::normals::DEFAULT_NEIGHBOURS,
             measure_deviation: true,
         }
     }
@@ -347,6 +347,26 @@ pub(crate) mod tests {
         c.normals = None;
         let rep = check(&s, c, 2);
         assert_eq!(rep.normal_source, NormalSource::Estimated);
+    }
+
+    #[test]
+    fn result_does_not_depend_on_thread_count() {
+        let t = Shape::Torus(1.0, 0.35);
+        let mut c = t.sample(3000, 1e-3, true);
+        c.normals = None;
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| reconstruct(&c, &ReconstructOptions::default(), &mut |_, _| {}))
+                .unwrap()
+                .0
+        };
+        let a = run(1);
+        let b = run(3);
+        assert_eq!(a.faces, b.faces);
+        assert_eq!(a.positions, b.positions);
     }
 
     #[test]

@@ -260,6 +260,15 @@ impl PouImplicit {
         })
     }
 
+    /// Fits the implicit to the input of a command: the referenced vertices of a mesh with its
+    /// face normals, or a cloud with its own normals (flips repaired) or estimated ones (PCA
+    /// over 12 neighbours, oriented by a minimum spanning tree). The two steps separately are
+    /// [`crate::normals::oriented_points`] and [`PouImplicit::fit`].
+    pub fn from_mesh(input: &crate::mesh::Mesh, opts: &FitOptions) -> Result<PouImplicit> {
+        let op = crate::normals::oriented_points(input, crate::normals::DEFAULT_NEIGHBOURS)?;
+        PouImplicit::fit(&op.points, &op.normals, opts)
+    }
+
     /// Fit statistics.
     pub fn stats(&self) -> &FitStats {
         &self.stats
