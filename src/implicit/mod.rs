@@ -29,6 +29,7 @@ pub trait Implicit: Sync {
 }
 
 pub mod local;
+pub mod noise;
 pub mod poly;
 pub mod pou;
 pub mod project;

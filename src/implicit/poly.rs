@@ -134,14 +134,14 @@ fn monomials(u: f64, v: f64) -> [f64; 10] {
 impl HeightPoly {
     /// Least-squares fit of `W = h(U, V)` to `points` in `frame`. A tiny ridge on the non-linear
     /// coefficients keeps the fit bounded where the points do not span the cell (a strip). Errors
-    /// when there are too few points (3 for a plane, 9 for a quadratic, 20 for a cubic) or the
+    /// when there are too few points (3 for a plane, 9 for a quadratic, 30 for a cubic) or the
     /// normal equations are singular.
     pub fn fit(points: &[Point3<f64>], frame: Frame, degree: Degree) -> Result<HeightPoly> {
         let m = degree.terms();
         let needed = match degree {
             Degree::Linear => 3,
             Degree::Quadratic => 9,
-            Degree::Cubic => 20,
+            Degree::Cubic => 30,
         };
         if points.len() < needed {
             return Err(Error::Degenerate(format!(

@@ -34,8 +34,9 @@ use nalgebra::{Point3, Vector3};
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct FitOptions {
     /// Largest accepted |f| at a domain's points, as a fraction of the bounding-box diagonal
-    /// (default 2e-4, about the noise of a good scan). Domains that miss it are split (or, when
-    /// too small to split, use an RBF, which interpolates).
+    /// (default 2e-4, about the noise of a good scan; raised to the estimated noise of the
+    /// points when that is larger). Domains that miss it are split; when too small to split
+    /// they keep a polynomial within 1.5 times the tolerance, or else use an RBF.
     pub tolerance: f64,
     /// A domain whose support holds more points is split (default 120; seed 003: 30-300).
     pub max_points: usize,
@@ -96,6 +97,10 @@ impl FitOptions {
 /// What the fit produced.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct FitStats {
+    /// Estimated scatter of the points about the surface (rms), relative to the diagonal.
+    pub noise: f64,
+    /// The tolerance used: the requested one, raised to the noise if that is larger.
+    pub tolerance: f64,
     pub points: usize,
     pub cells: usize,
     pub linear: usize,
@@ -144,6 +149,10 @@ pub struct PouImplicit {
 /// Weight factor of cells without points in their support (holes, empty space): they decide F
 /// only where no fitted cell reaches.
 const EXTRAPOLATION_PRIORITY: f64 = 1e-12;
+
+/// A domain too small to split keeps a polynomial whose residual is within this many times the
+/// tolerance (the misfit is noise there).
+const LEAF_FACTOR: f64 = 1.5;
 
 /// Seed 003 eq. 7b and its derivative dW/dd.
 #[inline]
@@ -196,7 +205,10 @@ impl PouImplicit {
         }
         let kd = KdTree::build(&pts)?;
         let root = Cube::around(&bbox, 0.1);
-        let tol = opts.tolerance * diagonal;
+        // The tolerance is never below the points' own scatter (see `noise`): asking more only
+        // splits domains until they interpolate the noise.
+        let noise = super::noise::estimate_noise(&pts, &nrm, &kd, opts.min_points, 2000);
+        let tol = (opts.tolerance * diagonal).max(noise);
         let builder = Builder {
             pts: &pts,
             nrm: &nrm,
@@ -207,6 +219,8 @@ impl PouImplicit {
         };
         let tree = Octree::build(root, &pts, opts.max_depth, |c| builder.decide(c));
         let mut stats = FitStats {
+            noise: noise / diagonal,
+            tolerance: tol / diagonal,
             points: pts.len(),
             cells: tree.payloads().len(),
             diagonal,
@@ -244,6 +258,15 @@ impl PouImplicit {
             diagonal,
             stats,
         })
+    }
+
+    /// Fits the implicit to the input of a command: the referenced vertices of a mesh with its
+    /// face normals, or a cloud with its own normals (flips repaired) or estimated ones (PCA
+    /// over 12 neighbours, oriented by a minimum spanning tree). The two steps separately are
+    /// [`crate::normals::oriented_points`] and [`PouImplicit::fit`].
+    pub fn from_mesh(input: &crate::mesh::Mesh, opts: &FitOptions) -> Result<PouImplicit> {
+        let op = crate::normals::oriented_points(input, crate::normals::DEFAULT_NEIGHBOURS)?;
+        PouImplicit::fit(&op.points, &op.normals, opts)
     }
 
     /// Fit statistics.
@@ -428,8 +451,11 @@ impl Builder<'_> {
             return false;
         };
         let fr = &hp.frame;
-        // Natural gaps between samples are up to about the sampling radius.
-        let gap = (0.25 * cube.size).max(self.sampling_radius(&cube.center()));
+        // Natural gaps between samples are below a few point spacings (the nearest-neighbour
+        // distance, which stays small along the rim of a hole).
+        let (i, _) = self.kd.nearest(&cube.center());
+        let spacing = self.kd.knn(&self.pts[i], 2).get(1).map_or(0.0, |x| x.1);
+        let gap = (0.25 * cube.size).max(2.5 * spacing);
         let half = 0.5 * cube.size * 3f64.sqrt() / fr.scale;
         let c = fr.local(&cube.center());
         const N: usize = 6;
@@ -591,8 +617,8 @@ impl Builder<'_> {
         if empty {
             // A hole (or the space beside the surface): widen the fit set until it surrounds the
             // cell, reaching across the hole rather than only to its nearest edge. Only points
-            // facing like the nearest ones count (the rim of a hole in a flat base, not the
-            // walls rising beside it).
+            // facing the same way as the nearest ones count (the rim of a hole in a flat base,
+            // not the far side of a thin part).
             let nref: Vector3<f64> = self
                 .kd
                 .knn(&c, o.min_points)
@@ -602,13 +628,26 @@ impl Builder<'_> {
             let nref = nref.try_normalize(1e-12).unwrap_or_else(Vector3::zeros);
             let facing = |idx: Vec<usize>| -> Vec<usize> {
                 idx.into_iter()
-                    .filter(|&i| self.nrm[i].dot(&nref) > 0.5)
+                    .filter(|&i| self.nrm[i].dot(&nref) > 0.0)
                     .collect()
             };
             idx = facing(idx);
-            while (idx.len() < 3 * o.min_points || !self.surrounds(&idx, &c)) && h < limit {
+            // A hole wider than a few times the distance to its nearest rim is not bridged
+            // better by looking farther.
+            let near = self.kd.nearest(&c).1;
+            let hole_limit = limit.min(h0 + 6.0 * near);
+            while (idx.len() < 3 * o.min_points || !self.surrounds(&idx, &c)) && h < hole_limit {
                 h *= 1.25;
                 idx = facing(self.in_box(&c, h));
+            }
+            // Bridge with the rim points nearest to the cell (seed 000: the hole's boundary and
+            // its neighbourhood), not with the whole grown box, whose far parts only distort.
+            let keep = 3 * o.min_points;
+            if idx.len() > keep {
+                let d2 = |i: &usize| (self.pts[*i] - c).norm_squared();
+                idx.select_nth_unstable_by(keep - 1, |a, b| d2(a).total_cmp(&d2(b)).then(a.cmp(b)));
+                idx.truncate(keep);
+                idx.sort_unstable();
             }
         }
         let p: Vec<Point3<f64>> = idx.iter().map(|&i| self.pts[i]).collect();
@@ -621,11 +660,7 @@ impl Builder<'_> {
         };
         let mut best: Option<LocalFit> = None;
         // Empty cells only extrapolate: a looser tolerance, and the lowest degree meeting it.
-        let tol = if empty {
-            (10.0 * self.tol).max(0.02 * h)
-        } else {
-            self.tol
-        };
+        let tol = if empty { 10.0 * self.tol } else { self.tol };
         if let Some(frame) = local::height_frame(&p, &n, &params) {
             for degree in [Degree::Quadratic, Degree::Cubic] {
                 let fit = local::fit_poly(&p, &n, frame, degree);
@@ -671,7 +706,16 @@ impl Builder<'_> {
         {
             return Decision::Split;
         }
-        // Too small to split: an RBF through the (sub-sampled) support.
+        // Too small to split. A polynomial within a few times the tolerance is kept: what it
+        // misses at this size is noise, which a least-squares fit smooths and an interpolating
+        // RBF would follow with wiggles. Otherwise (folds, sharp features) an RBF through the
+        // (sub-sampled) support.
+        if best
+            .as_ref()
+            .is_some_and(|f| f.max_residual <= LEAF_FACTOR * self.tol && f.normal_agreement >= 1.0)
+        {
+            return self.leaf(c, h0, p.len(), best.unwrap_or_else(|| unreachable!()));
+        }
         best = local::better(best, self.rbf(&p, &n, &params), self.tol);
         if best.is_none() {
             // Last resort: a plane-like height function along the mean normal.

@@ -5,13 +5,14 @@
 //! follow, one per edge) and, for each new vertex, the two endpoints of its edge.
 
 use super::Mesh;
-use std::collections::HashMap;
+use crate::spatial::fast_hash::IntMap;
 
 /// The subdivided mesh and the parent edge `[a, b]` of every new vertex (in index order, the
 /// first new vertex being `mesh.positions.len()`).
 pub fn subdivide(mesh: &Mesh) -> (Mesh, Vec<[u32; 2]>) {
     let n = mesh.positions.len() as u32;
-    let mut edge_vertex: HashMap<(u32, u32), u32> = HashMap::with_capacity(mesh.faces.len() * 2);
+    let mut edge_vertex: IntMap<(u32, u32), u32> = IntMap::default();
+    edge_vertex.reserve(mesh.faces.len() * 2);
     let mut parents: Vec<[u32; 2]> = Vec::new();
     let mut positions = mesh.positions.clone();
     let mut mid = |a: u32, b: u32, positions: &mut Vec<_>| -> u32 {

@@ -12,6 +12,9 @@ use crate::spatial::KdTree;
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 
+/// Neighbours used for normal estimation and flip repair unless told otherwise.
+pub const DEFAULT_NEIGHBOURS: usize = 12;
+
 /// Where the normals of [`OrientedPoints`] came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum NormalSource {

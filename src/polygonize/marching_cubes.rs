@@ -21,10 +21,10 @@
 
 use crate::implicit::Implicit;
 use crate::mesh::{Aabb, Mesh};
+use crate::spatial::fast_hash::{IntMap, IntSet};
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
-use std::collections::{HashMap, HashSet};
 
 /// Largest grid index per axis (21 bits).
 const MAX_CELLS: i64 = (1 << 21) - 2;
@@ -135,10 +135,18 @@ fn edge_id(a: usize, b: usize) -> usize {
     lo * 3 + axis
 }
 
-/// The surface loops inside one cube, as sequences of cube-edge ids (lower corner bits * 3 +
-/// axis), oriented so that the fan triangles face outwards.
-fn cube_loops(v: &[f64; 8], faces: &[(usize, usize, [usize; 4]); 6]) -> Vec<Vec<usize>> {
-    let mut next = [usize::MAX; 24];
+/// The surface loops inside one cube: all crossing cube-edge ids (lower corner bits * 3 + axis)
+/// loop after loop, with each loop's length; oriented so that the fan triangles face outwards.
+/// At most 12 edges in at most 4 loops.
+#[derive(Debug, Default)]
+struct Loops {
+    edges: [u8; 12],
+    lens: [u8; 4],
+    count: usize,
+}
+
+fn cube_loops(v: &[f64; 8], faces: &[(usize, usize, [usize; 4]); 6]) -> Loops {
+    let mut next = [u8::MAX; 24];
     for (_, _, bits) in faces {
         let fv = [v[bits[0]], v[bits[1]], v[bits[2]], v[bits[3]]];
         let neg = [fv[0] < 0.0, fv[1] < 0.0, fv[2] < 0.0, fv[3] < 0.0];
@@ -159,7 +167,7 @@ fn cube_loops(v: &[f64; 8], faces: &[(usize, usize, [usize; 4]); 6]) -> Vec<Vec<
                 } else {
                     (cr[1], cr[0])
                 };
-                next[p.0] = q.0;
+                next[p.0] = q.0 as u8;
             }
             4 => {
                 // Asymptotic decider: the bilinear interpolant's value at its saddle.
@@ -177,31 +185,37 @@ fn cube_loops(v: &[f64; 8], faces: &[(usize, usize, [usize; 4]); 6]) -> Vec<Vec<
                         } else {
                             cr[(i + 1) % 4]
                         };
-                        next[cr[i].0] = q.0;
+                        next[cr[i].0] = q.0 as u8;
                     }
                 }
             }
             _ => {}
         }
     }
-    let mut loops = Vec::new();
+    let mut out = Loops::default();
     let mut seen = [false; 24];
+    let mut total = 0usize;
     for s in 0..24 {
-        if next[s] == usize::MAX || seen[s] {
+        if next[s] == u8::MAX || seen[s] {
             continue;
         }
-        let mut lp = Vec::new();
+        let first = total;
         let mut e = s;
-        while !seen[e] && e != usize::MAX {
+        while e != u8::MAX as usize && !seen[e] && total < 12 {
             seen[e] = true;
-            lp.push(e);
-            e = next[e];
+            out.edges[total] = e as u8;
+            total += 1;
+            e = next[e] as usize;
         }
-        if lp.len() >= 3 {
-            loops.push(lp);
+        let len = total - first;
+        if len >= 3 && out.count < 4 {
+            out.lens[out.count] = len as u8;
+            out.count += 1;
+        } else {
+            total = first;
         }
     }
-    loops
+    out
 }
 
 /// Polygonizes the zero set of `f` reachable from the cubes holding `seeds`, on a grid of cube
@@ -214,8 +228,8 @@ pub fn marching_cubes<F: Implicit + ?Sized>(
     cell: f64,
 ) -> Result<Mesh> {
     let grid = Grid::new(domain, cell)?;
-    let mut values: HashMap<u64, f64> = HashMap::new();
-    let eval = |values: &mut HashMap<u64, f64>, cubes: &[[i64; 3]]| {
+    let mut values: IntMap<u64, f64> = IntMap::default();
+    let eval = |values: &mut IntMap<u64, f64>, cubes: &[[i64; 3]]| {
         let mut need: Vec<u64> = Vec::new();
         for c in cubes {
             for b in 0..8 {
@@ -243,15 +257,19 @@ pub fn marching_cubes<F: Implicit + ?Sized>(
                 }
             })
             .collect();
+        values.reserve(need.len());
         for (k, v) in need.into_iter().zip(vals) {
             values.insert(k, v);
         }
     };
-    let cube_values = |values: &HashMap<u64, f64>, c: [i64; 3]| -> [f64; 8] {
+    let cube_values = |values: &IntMap<u64, f64>, c: [i64; 3]| -> [f64; 8] {
         let mut v = [0.0; 8];
         for (b, x) in v.iter_mut().enumerate() {
             let g = corner(c, b);
-            *x = values[&Grid::key(g[0], g[1], g[2])];
+            *x = values
+                .get(&Grid::key(g[0], g[1], g[2]))
+                .copied()
+                .unwrap_or(1.0);
         }
         v
     };
@@ -259,12 +277,12 @@ pub fn marching_cubes<F: Implicit + ?Sized>(
     let mut frontier: Vec<[i64; 3]> = seeds.iter().filter_map(|p| grid.cube_of(p)).collect();
     frontier.sort_unstable();
     frontier.dedup();
-    let mut visited: HashSet<u64> = frontier
+    let mut visited: IntSet<u64> = frontier
         .iter()
         .map(|c| Grid::key(c[0], c[1], c[2]))
         .collect();
     let fcs = faces();
-    let mut active: Vec<[i64; 3]> = Vec::new();
+    let mut active: Vec<([i64; 3], [f64; 8])> = Vec::new();
     let mut first_wave = true;
     while !frontier.is_empty() {
         eval(&mut values, &frontier);
@@ -286,7 +304,7 @@ pub fn marching_cubes<F: Implicit + ?Sized>(
                 }
                 continue;
             }
-            active.push(c);
+            active.push((c, v));
             for (a, s, bits) in &fcs {
                 let negs = bits.iter().filter(|&&b| v[b] < 0.0).count();
                 if negs == 0 || negs == 4 {
@@ -306,33 +324,40 @@ pub fn marching_cubes<F: Implicit + ?Sized>(
         frontier = next;
         first_wave = false;
     }
-    active.sort_unstable();
+    drop(values);
+    drop(visited);
+    active.sort_unstable_by_key(|a| a.0);
 
     let mut mesh = Mesh::default();
-    let mut vert: HashMap<(u64, u8), u32> = HashMap::new();
-    for &c in &active {
-        let v = cube_values(&values, c);
-        for lp in cube_loops(&v, &fcs) {
-            let ids: Vec<u32> = lp
-                .iter()
-                .map(|&e| {
-                    let (lo, axis) = (e / 3, e % 3);
-                    let hi = lo | (1 << axis);
-                    let ga = corner(c, lo);
-                    let key = (Grid::key(ga[0], ga[1], ga[2]), axis as u8);
-                    *vert.entry(key).or_insert_with(|| {
-                        let (fa, fb) = (v[lo], v[hi]);
-                        let t = (fa / (fa - fb)).clamp(0.01, 0.99);
-                        let pa = grid.point(ga);
-                        let pb = grid.point(corner(c, hi));
-                        mesh.positions.push(pa + (pb - pa) * t);
-                        (mesh.positions.len() - 1) as u32
-                    })
-                })
-                .collect();
-            for k in 1..ids.len() - 1 {
+    let mut vert: IntMap<(u64, u8), u32> = IntMap::default();
+    vert.reserve(active.len() * 2);
+    mesh.faces.reserve(active.len() * 2);
+    mesh.positions.reserve(active.len());
+    for (c, v) in &active {
+        let loops = cube_loops(v, &fcs);
+        let mut at = 0usize;
+        for l in 0..loops.count {
+            let len = loops.lens[l] as usize;
+            let mut ids = [0u32; 12];
+            for (k, &e) in loops.edges[at..at + len].iter().enumerate() {
+                let e = e as usize;
+                let (lo, axis) = (e / 3, e % 3);
+                let hi = lo | (1 << axis);
+                let ga = corner(*c, lo);
+                let key = (Grid::key(ga[0], ga[1], ga[2]), axis as u8);
+                ids[k] = *vert.entry(key).or_insert_with(|| {
+                    let (fa, fb) = (v[lo], v[hi]);
+                    let t = (fa / (fa - fb)).clamp(0.01, 0.99);
+                    let pa = grid.point(ga);
+                    let pb = grid.point(corner(*c, hi));
+                    mesh.positions.push(pa + (pb - pa) * t);
+                    (mesh.positions.len() - 1) as u32
+                });
+            }
+            for k in 1..len - 1 {
                 mesh.faces.push([ids[0], ids[k], ids[k + 1]]);
             }
+            at += len;
         }
     }
     Ok(mesh)

@@ -1,6 +1,7 @@
 //! Spatial search structures: a k-d tree for neighbour queries and an adaptive octree for the
 //! domain decomposition of the implicit surface (seed 003 section 3.1).
 
+pub mod fast_hash;
 pub mod kdtree;
 pub mod octree;
 pub mod triangle_bvh;
