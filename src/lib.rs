@@ -7,6 +7,7 @@
 
 pub mod cli;
 pub mod error;
+pub mod holes;
 pub mod implicit;
 pub mod inspect;
 pub mod io;
