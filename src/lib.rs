@@ -9,6 +9,7 @@ pub mod cli;
 pub mod error;
 pub mod export;
 pub mod fit;
+pub mod holes;
 pub mod implicit;
 pub mod inspect;
 pub mod io;

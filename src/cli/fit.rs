@@ -110,9 +110,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     let unit: LengthUnit = a.unit.parse()?;
     let stamp = timestamp(&a)?;
     let size = match (a.patches, a.patch_size) {
-        (Some(0), _) => {
-            return Err(Error::InvalidOption("--patches must be at least 1".into()))
-        }
+        (Some(0), _) => return Err(Error::InvalidOption("--patches must be at least 1".into())),
         (Some(n), _) => PatchSize::Count(n),
         (None, Some(l)) => PatchSize::Edge(l),
         (None, None) => PatchSize::Count(crate::fit::net::DEFAULT_PATCHES),

@@ -1,6 +1,7 @@
 //! The `scansurf` command line: clap subcommands that parse, call the library and print.
 //! No algorithms live here.
 
+mod fill_holes;
 mod fit;
 mod inspect;
 pub mod progress;
@@ -29,6 +30,13 @@ pub enum Command {
         after_help = "Examples:\n  scansurf fit scan.ply -o part.step --iges part.igs --report part.json\n  scansurf fit bunny.obj -o bunny.step --patches 800 --preview bunny.png\n  scansurf fit cloud.xyz -o out.step --patch-size 5 --tolerance 5e-5"
     )]
     Fit(fit::Args),
+    /// Close the holes of a mesh, keeping every original triangle: local RBF (seed 000) or
+    /// planar Delaunay with circular arcs (seed 002).
+    #[command(
+        name = "fill-holes",
+        after_help = "Examples:\n  scansurf fill-holes bunny.obj -o filled.ply\n  scansurf fill-holes scan.ply -o out.ply --method planar --max-size 20 --report holes.json"
+    )]
+    FillHoles(fill_holes::Args),
     /// Count points, faces, components, holes and defects of a mesh or point cloud.
     #[command(
         after_help = "Example:\n  scansurf inspect scan.ply\n  scansurf inspect bunny.obj --json > bunny.json"
@@ -64,6 +72,7 @@ pub fn run() -> i32 {
     };
     let result = match cli.command {
         Command::Fit(a) => fit::run(a, cli.quiet),
+        Command::FillHoles(a) => fill_holes::run(a, cli.quiet),
         Command::Inspect(a) => inspect::run(a, cli.quiet),
         Command::Smooth(a) => smooth::run(a, cli.quiet),
         Command::Render(a) => render::run(a, cli.quiet),

@@ -92,4 +92,3 @@ pub fn fit_net<I: Implicit + ?Sized>(
     };
     Ok((net, report))
 }
-
