@@ -391,37 +391,3 @@ pub(crate) mod tests {
         assert!(reconstruct(&s, &bad, &mut |_, _| {}).is_err());
     }
 }
-#[cfg(test)]
-mod debug_tests {
-    use super::tests::*;
-    use super::*;
-    use crate::implicit::Implicit;
-    use nalgebra::Point3;
-    #[test]
-    #[ignore]
-    fn torus_hole() {
-        let t = Shape::Torus(1.0, 0.35);
-        let c = t.sample(6000, 1e-3, false);
-        let (mesh, rep) = reconstruct(&c, &ReconstructOptions::default(), &mut |_, _| {}).unwrap();
-        let op = oriented_points(&c, 12).unwrap();
-        let f = PouImplicit::fit(&op.points, &op.normals, &FitOptions::default()).unwrap();
-        println!("{:?}", rep.fit);
-        let mut worst: Vec<(f64, Point3<f64>)> = mesh
-            .positions
-            .iter()
-            .map(|p| (t.distance(p).abs(), *p))
-            .collect();
-        worst.sort_by(|a, b| b.0.total_cmp(&a.0));
-        for (d, x) in &worst[..3] {
-            println!(
-                "x {x:?} err {d:.3e} F {:.3e} near {:.3e}",
-                f.value(x),
-                f.kdtree().nearest(x).1
-            );
-            for (l, w, v) in f.contributions(x) {
-                let cell = &f.cells()[l];
-                println!("   cell {l} {:?} c={:?} w={w:.3e} f={v:.3e} n={} res={:.2e} h={:.4} pr={} ok={}", cell.function.kind(), cell.center, cell.support_points, cell.max_residual, cell.half.x, cell.priority, cell.meets_tolerance);
-            }
-        }
-    }
-}

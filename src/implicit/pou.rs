@@ -127,9 +127,9 @@ pub struct Cell {
     pub center: Point3<f64>,
     pub half: Vector3<f64>,
     pub function: LocalFunction,
-    /// Factor on the blending weight: 1 for cells with points in their support, small for
-    /// empty cells, which only extrapolate and should count only where nothing else does.
-    pub priority: f64,
+    /// True for cells without points in their support (holes, empty space): they only
+    /// extrapolate and are blended in away from the points (see [`PouImplicit::blend`]).
+    pub extrapolating: bool,
     pub support_points: u32,
     pub max_residual: f64,
     pub meets_tolerance: bool,
@@ -143,16 +143,38 @@ pub struct PouImplicit {
     normals: Vec<Vector3<f64>>,
     kd: KdTree,
     diagonal: f64,
+    /// Distance from the points over which extrapolating cells take over (two spacings).
+    blend_radius: f64,
     stats: FitStats,
 }
 
-/// Weight factor of cells without points in their support (holes, empty space): they decide F
-/// only where no fitted cell reaches.
-const EXTRAPOLATION_PRIORITY: f64 = 1e-12;
+/// Support of an extrapolating cell relative to a fitted cell's.
+const EXTRAPOLATION_SPREAD: f64 = 1.5;
+
+/// A hole cell fits its bridge to this many times `min_points` rim points nearest to it (many,
+/// so that neighbouring hole cells share most of them and agree).
+const BRIDGE_POINTS: usize = 8;
 
 /// A domain too small to split keeps a polynomial whose residual is within this many times the
 /// tolerance (the misfit is noise there).
 const LEAF_FACTOR: f64 = 1.5;
+
+/// Median over up to 2000 strided points of the distance to the 8th nearest neighbour divided by
+/// sqrt(8 / pi): the spacing of an even sampling with the same density.
+fn sample_spacing(points: &[Point3<f64>], kd: &KdTree) -> f64 {
+    const K: usize = 8;
+    if points.len() <= K {
+        return 0.0;
+    }
+    let step = (points.len() / 2000).max(1);
+    let mut d: Vec<f64> = (0..points.len())
+        .step_by(step)
+        .map(|i| kd.knn(&points[i], K + 1).last().map_or(0.0, |x| x.1))
+        .collect();
+    let m = d.len() / 2;
+    let (_, v, _) = d.select_nth_unstable_by(m, f64::total_cmp);
+    *v / (K as f64 / std::f64::consts::PI).sqrt()
+}
 
 /// Seed 003 eq. 7b and its derivative dW/dd.
 #[inline]
@@ -235,7 +257,7 @@ impl PouImplicit {
                 LocalKind::Rbf => stats.rbf += 1,
                 LocalKind::Constant => stats.constant += 1,
             }
-            if cell.priority < 1.0 {
+            if cell.extrapolating {
                 stats.extrapolating += 1;
                 if cell.function.kind() == LocalKind::Rbf {
                     stats.extrapolating_rbf += 1;
@@ -250,12 +272,14 @@ impl PouImplicit {
             support_sum += cell.support_points as usize;
         }
         stats.mean_support_points = support_sum as f64 / stats.cells.max(1) as f64;
+        let blend_radius = 2.0 * sample_spacing(&pts, &kd).max(1e-9 * diagonal);
         Ok(PouImplicit {
             tree,
             points: pts,
             normals: nrm,
             kd,
             diagonal,
+            blend_radius,
             stats,
         })
     }
@@ -294,8 +318,8 @@ impl PouImplicit {
         self.tree.payloads()
     }
 
-    /// The cells whose support holds `x`, with their blending weight (seed 003 eq. 7, times the
-    /// cell's priority) and value at `x` (for inspection and tests).
+    /// The cells whose support holds `x`, with their blending weight (seed 003 eq. 7) and value
+    /// at `x` (for inspection and tests).
     pub fn contributions(&self, x: &Point3<f64>) -> Vec<(usize, f64, f64)> {
         let cells = self.tree.payloads();
         let mut out = Vec::new();
@@ -303,7 +327,7 @@ impl PouImplicit {
             let c = &cells[l];
             let t = (x - c.center).component_div(&c.half);
             let prod: f64 = (0..3).map(|k| (1.0 - t[k] * t[k]).max(0.0)).product();
-            let w = weight(1.0 - prod).0 * c.priority;
+            let w = weight(1.0 - prod).0;
             out.push((l, w, c.function.value(x)));
         });
         out
@@ -327,13 +351,24 @@ impl PouImplicit {
     }
 
     /// F(x) and, when `with_gradient`, grad F(x) (seed 003 eq. 8 and its derivative).
+    ///
+    /// Fitted cells and extrapolating cells (holes, empty space) are summed apart and combined
+    /// as `F = (A_fit + p A_ext) / (S_fit + p S_ext)` (A: sum of W f, S: sum of W), where the
+    /// priority `p = clamp((delta - s) / 2s, 0, 1)^2` grows with the distance `delta` to the
+    /// nearest point (`s`: the point spacing). Within a spacing of the points the fitted cells
+    /// decide alone; inside a hole the bridge takes over smoothly instead of at the edge of the
+    /// fitted cells' supports.
     #[inline]
     fn blend(&self, x: &Point3<f64>, with_gradient: bool) -> (f64, Vector3<f64>) {
-        let mut sw = 0.0;
-        let mut swf = 0.0;
-        let mut g_wf = Vector3::zeros(); // sum W grad f
-        let mut g_dwf = Vector3::zeros(); // sum grad W f
-        let mut g_dw = Vector3::zeros(); // sum grad W
+        #[derive(Default)]
+        struct Acc {
+            s: f64,
+            a: f64,
+            g_wf: Vector3<f64>,
+            g_dwf: Vector3<f64>,
+            g_dw: Vector3<f64>,
+        }
+        let mut acc = [Acc::default(), Acc::default()];
         let cells = self.tree.payloads();
         self.tree.for_each_support(x, |l| {
             let c = &cells[l];
@@ -345,10 +380,10 @@ impl PouImplicit {
             let prod = q.x * q.y * q.z;
             let d = 1.0 - prod;
             let (w, dw) = weight(d);
-            let (w, dw) = (w * c.priority, dw * c.priority);
             if w <= 0.0 {
                 return;
             }
+            let a = &mut acc[c.extrapolating as usize];
             if with_gradient {
                 let (f, gf) = c.function.value_and_gradient(x);
                 // d d / d x_r = 2 t_r / a_r * prod_{s != r} q_s
@@ -358,23 +393,49 @@ impl PouImplicit {
                     2.0 * t.z / c.half.z * q.x * q.y,
                 );
                 let gw = gd * dw;
-                sw += w;
-                swf += w * f;
-                g_wf += gf * w;
-                g_dwf += gw * f;
-                g_dw += gw;
+                a.s += w;
+                a.a += w * f;
+                a.g_wf += gf * w;
+                a.g_dwf += gw * f;
+                a.g_dw += gw;
             } else {
                 let f = c.function.value(x);
-                sw += w;
-                swf += w * f;
+                a.s += w;
+                a.a += w * f;
             }
         });
-        if sw.is_nan() || sw <= 1e-300 {
+        let [fit, ext] = &acc;
+        // Priority of the extrapolating cells and its gradient.
+        let (p, gp) = if ext.s <= 0.0 || fit.s <= 0.0 {
+            (1.0, Vector3::zeros())
+        } else {
+            let (i, delta) = self.kd.nearest(x);
+            // Ramp from one spacing (half the blend radius) to three.
+            let r0 = 0.5 * self.blend_radius;
+            let r = self.blend_radius;
+            if delta >= r0 + r {
+                (1.0, Vector3::zeros())
+            } else if delta <= r0 {
+                (0.0, Vector3::zeros())
+            } else {
+                let s = (delta - r0) / r;
+                let g = if with_gradient {
+                    (x - self.points[i]) * (2.0 * s / (r * delta))
+                } else {
+                    Vector3::zeros()
+                };
+                (s * s, g)
+            }
+        };
+        let sw = fit.s + p * ext.s;
+        if sw.is_nan() || sw <= 0.0 {
             return self.fallback(x);
         }
-        let f = swf / sw;
+        let f = (fit.a + p * ext.a) / sw;
         if with_gradient {
-            (f, (g_wf + g_dwf - g_dw * f) / sw)
+            let ga = fit.g_wf + fit.g_dwf + (ext.g_wf + ext.g_dwf) * p + gp * ext.a;
+            let gs = fit.g_dw + ext.g_dw * p + gp * ext.s;
+            (f, (ga - gs * f) / sw)
         } else {
             (f, Vector3::zeros())
         }
@@ -415,7 +476,7 @@ impl Builder<'_> {
     }
 
     fn leaf(&self, c: Point3<f64>, h: f64, n: usize, fit: LocalFit) -> Decision<Cell> {
-        self.leaf_with(c, h, n, fit, 1.0)
+        self.leaf_with(c, h, n, fit, false)
     }
 
     fn leaf_with(
@@ -424,15 +485,22 @@ impl Builder<'_> {
         h: f64,
         n: usize,
         fit: LocalFit,
-        priority: f64,
+        extrapolating: bool,
     ) -> Decision<Cell> {
         let meets = fit.meets(self.tol);
+        // Extrapolating cells overlap their neighbours more, so that bridges of a hole made by
+        // different cells blend smoothly.
+        let h = if extrapolating {
+            h * EXTRAPOLATION_SPREAD
+        } else {
+            h
+        };
         Decision::Leaf {
             payload: Cell {
                 center: c,
                 half: Vector3::repeat(h),
                 function: fit.function,
-                priority,
+                extrapolating,
                 support_points: n as u32,
                 max_residual: fit.max_residual,
                 meets_tolerance: meets,
@@ -507,7 +575,7 @@ impl Builder<'_> {
                 )
             }
         };
-        Some(self.leaf_with(*c, h0, p.len(), fit, EXTRAPOLATION_PRIORITY))
+        Some(self.leaf_with(*c, h0, p.len(), fit, true))
     }
 
     /// A thin-plate RBF through the points (an evenly strided subset of at most
@@ -578,7 +646,7 @@ impl Builder<'_> {
                 rms_residual: 0.0,
                 normal_agreement: 1.0,
             },
-            EXTRAPOLATION_PRIORITY,
+            true,
         )
     }
 
@@ -628,7 +696,7 @@ impl Builder<'_> {
             let nref = nref.try_normalize(1e-12).unwrap_or_else(Vector3::zeros);
             let facing = |idx: Vec<usize>| -> Vec<usize> {
                 idx.into_iter()
-                    .filter(|&i| self.nrm[i].dot(&nref) > 0.0)
+                    .filter(|&i| self.nrm[i].dot(&nref) > 0.5)
                     .collect()
             };
             idx = facing(idx);
@@ -642,7 +710,7 @@ impl Builder<'_> {
             }
             // Bridge with the rim points nearest to the cell (seed 000: the hole's boundary and
             // its neighbourhood), not with the whole grown box, whose far parts only distort.
-            let keep = 3 * o.min_points;
+            let keep = BRIDGE_POINTS * o.min_points;
             if idx.len() > keep {
                 let d2 = |i: &usize| (self.pts[*i] - c).norm_squared();
                 idx.select_nth_unstable_by(keep - 1, |a, b| d2(a).total_cmp(&d2(b)).then(a.cmp(b)));
@@ -666,7 +734,7 @@ impl Builder<'_> {
                 let fit = local::fit_poly(&p, &n, frame, degree);
                 if let Some(f) = fit.as_ref().filter(|f| f.meets(tol)) {
                     if empty {
-                        return self.leaf_with(c, h0, p.len(), f.clone(), EXTRAPOLATION_PRIORITY);
+                        return self.leaf_with(c, h0, p.len(), f.clone(), true);
                     }
                     if ctx.can_split && self.has_gap(&ctx.cube, &f.function) {
                         // The points cover only part of the cell: extrapolating over the rest
@@ -694,7 +762,7 @@ impl Builder<'_> {
             // Any sensible bridge beats a constant, whose jumps to its neighbours are walls.
             return match best {
                 Some(f) if f.max_residual <= tol.max(0.25 * h) && f.normal_agreement >= 0.9 => {
-                    self.leaf_with(c, h0, p.len(), f, EXTRAPOLATION_PRIORITY)
+                    self.leaf_with(c, h0, p.len(), f, true)
                 }
                 _ => self.constant(c, h0, 0),
             };
@@ -814,64 +882,5 @@ pub(crate) mod tests {
             ..o
         };
         assert!(PouImplicit::fit(&p, &n, &bad).is_err());
-    }
-}
-#[cfg(test)]
-mod debug_tests {
-    use super::tests::sphere;
-    use super::*;
-    #[test]
-    #[ignore]
-    fn dump_cells() {
-        let (p, n) = sphere(4000, 1.0, 0.25);
-        let f = PouImplicit::fit(&p, &n, &FitOptions::default()).unwrap();
-        let (probe, _) = sphere(3000, 1.0, 0.0);
-        let mut errs: Vec<(f64, Point3<f64>)> = probe.iter().map(|x| (f.value(x), *x)).collect();
-        errs.sort_by(|a, b| b.0.abs().partial_cmp(&a.0.abs()).unwrap());
-        for (e, x) in &errs[..10] {
-            println!("err {e:.3e} at {x:?}");
-            f.tree.for_each_support(x, |l| {
-                let c = &f.cells()[l];
-                println!(
-                    "   {:?} {:?} n={} res={:.3e} h={:.3} f={:.3e} pr={} ok={}",
-                    c.center,
-                    c.function.kind(),
-                    c.support_points,
-                    c.max_residual,
-                    c.half.x,
-                    c.function.value(x),
-                    c.priority,
-                    c.meets_tolerance
-                );
-            });
-        }
-    }
-}
-#[cfg(test)]
-mod overlap_tests {
-    use super::tests::sphere;
-    use super::*;
-    #[test]
-    #[ignore]
-    fn overlaps() {
-        for hole in [0.0, 0.25] {
-            let (p, n) = sphere(4000, 1.0, hole);
-            let (probe, _) = sphere(5000, 1.0, 0.0);
-            for ov in [0.1, 0.25, 0.5, 0.75] {
-                let o = FitOptions {
-                    overlap: ov,
-                    ..Default::default()
-                };
-                let f = PouImplicit::fit(&p, &n, &o).unwrap();
-                let e = probe.iter().map(|x| f.value(x).abs()).fold(0.0, f64::max) / f.diagonal();
-                let m = probe.iter().map(|x| f.value(x).abs()).sum::<f64>()
-                    / probe.len() as f64
-                    / f.diagonal();
-                println!(
-                    "hole {hole} overlap {ov}: max {e:.3e} mean {m:.3e} {:?}",
-                    f.stats()
-                );
-            }
-        }
     }
 }
