@@ -69,7 +69,11 @@ fn fill(cut: &Mesh, method: FillMethod, dist: &dyn Fn(&Point3<f64>) -> f64) -> (
     assert!(t.non_manifold_edges.is_empty() && t.non_manifold_vertices.is_empty());
     assert_eq!(t.misoriented_edges, 0, "{method:?}");
     let open_before = cut.topology().loops.len();
-    assert_eq!(t.loops.len(), open_before - 1, "{method:?}: the hole is closed");
+    assert_eq!(
+        t.loops.len(),
+        open_before - 1,
+        "{method:?}: the hole is closed"
+    );
     measure(cut, &out, dist)
 }
 
@@ -85,7 +89,10 @@ fn check_case(name: &str, cut: &Mesh, dist: &dyn Fn(&Point3<f64>) -> f64, planar
     assert!(rbf <= flat / 5.0, "{name}: rbf {rbf:e} vs flat {flat:e}");
     assert!(jump < 5.0, "{name}: normal jump {jump} degrees");
     if planar_vs_rbf {
-        assert!(planar <= 2.0 * rbf, "{name}: planar {planar:e} vs rbf {rbf:e}");
+        assert!(
+            planar <= 2.0 * rbf,
+            "{name}: planar {planar:e} vs rbf {rbf:e}"
+        );
     }
 }
 

@@ -56,7 +56,10 @@ fn fill_all(name: &str, mesh: &Mesh, method: FillMethod) -> Mesh {
     let crossings = fill_intersections(&out, mesh.faces.len());
     assert!(crossings.is_empty(), "{name} {method:?}: {crossings:?}");
     let json = serde_json::to_value(&rep).unwrap();
-    assert_eq!(json["holes"].as_array().map(|a| a.len()), Some(rep.holes.len()));
+    assert_eq!(
+        json["holes"].as_array().map(|a| a.len()),
+        Some(rep.holes.len())
+    );
     out
 }
 
@@ -72,7 +75,10 @@ fn bunny_base_holes_close() {
     for method in [FillMethod::Rbf, FillMethod::Planar] {
         let out = fill_all("bunny", &bunny, method);
         // The 1,113 unreferenced vertices stay as they are.
-        assert_eq!(out.topology().unreferenced_vertices, before.unreferenced_vertices);
+        assert_eq!(
+            out.topology().unreferenced_vertices,
+            before.unreferenced_vertices
+        );
     }
 }
 
