@@ -12,28 +12,40 @@ use crate::mesh::{Mesh, Topology};
 use nalgebra::Point3;
 
 /// Removes the region around the vertex nearest `seed` where `inside` holds (see the module doc).
-pub fn cut_region(mesh: &Mesh, seed: &Point3<f64>, inside: &dyn Fn(&Point3<f64>) -> bool) -> Mesh {
+pub fn cut_region(mesh: &Mesh, seed: &Point3<f64>, inside: &Inside<'_>) -> Mesh {
+    cut_regions(mesh, &[(*seed, inside)])
+}
+
+/// Tells whether a point lies in a region to cut.
+pub type Inside<'a> = dyn Fn(&Point3<f64>) -> bool + 'a;
+
+/// Removes several regions at once (one adjacency build and one clean-up pass, for large
+/// meshes): each region is the set of vertices around the vertex nearest its seed where its
+/// predicate holds.
+pub fn cut_regions(mesh: &Mesh, regions: &[(Point3<f64>, &Inside<'_>)]) -> Mesh {
     let used = mesh.referenced();
-    let start = mesh
-        .positions
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| used[*i])
-        .min_by(|a, b| (a.1 - seed).norm().total_cmp(&(b.1 - seed).norm()))
-        .map(|(i, _)| i as u32);
-    let Some(start) = start else {
-        return mesh.clone();
-    };
     let vf = VertexFaces::build(mesh);
     let mut removed_v = vec![false; mesh.positions.len()];
-    let mut stack = vec![start];
-    removed_v[start as usize] = true;
-    while let Some(v) = stack.pop() {
-        for &f in vf.of(v) {
-            for &u in &mesh.faces[f as usize] {
-                if !removed_v[u as usize] && inside(&mesh.positions[u as usize]) {
-                    removed_v[u as usize] = true;
-                    stack.push(u);
+    for (seed, inside) in regions {
+        let start = mesh
+            .positions
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| used[*i])
+            .min_by(|a, b| (a.1 - seed).norm().total_cmp(&(b.1 - seed).norm()))
+            .map(|(i, _)| i as u32);
+        let Some(start) = start else {
+            continue;
+        };
+        let mut stack = vec![start];
+        removed_v[start as usize] = true;
+        while let Some(v) = stack.pop() {
+            for &f in vf.of(v) {
+                for &u in &mesh.faces[f as usize] {
+                    if !removed_v[u as usize] && inside(&mesh.positions[u as usize]) {
+                        removed_v[u as usize] = true;
+                        stack.push(u);
+                    }
                 }
             }
         }
@@ -58,6 +70,20 @@ pub fn cut_region(mesh: &Mesh, seed: &Point3<f64>, inside: &dyn Fn(&Point3<f64>)
         }
     }
     compact(&filter_faces(mesh, &keep))
+}
+
+/// Removes balls `(centre, radius)` at once (see [`cut_regions`]).
+pub fn cut_balls(mesh: &Mesh, balls: &[(Point3<f64>, f64)]) -> Mesh {
+    let preds: Vec<Box<Inside<'_>>> = balls
+        .iter()
+        .map(|&(c, r)| Box::new(move |p: &Point3<f64>| (p - c).norm() < r) as Box<Inside<'_>>)
+        .collect();
+    let regions: Vec<(Point3<f64>, &Inside<'_>)> = balls
+        .iter()
+        .zip(&preds)
+        .map(|(b, p)| (b.0, p.as_ref()))
+        .collect();
+    cut_regions(mesh, &regions)
 }
 
 /// Removes the hole within distance `radius` of `centre` (see [`cut_region`]).
@@ -119,6 +145,14 @@ mod tests {
         assert!(t.non_manifold_vertices.is_empty());
         assert_eq!(t.unreferenced_vertices, 0);
         assert!(c.faces.len() < s.faces.len());
+        let two = cut_balls(
+            &s,
+            &[
+                (Point3::new(0.0, 0.0, 1.0), 0.5),
+                (Point3::new(0.0, 0.0, -1.0), 0.3),
+            ],
+        );
+        assert_eq!(two.topology().loops.len(), 2);
         assert!(c
             .positions
             .iter()

@@ -2,8 +2,12 @@
 //! a hole or the border, and simple or twisted).
 //!
 //! The loops come from [`Topology`]: walked with the faces on the left, with the longest loop
-//! of an open sheet flagged as its outer border. A loop is left open when it is that border
-//! (unless `keep_border` is off) or when its size exceeds `max_size` (an opening by design).
+//! of an open sheet flagged as its outer border (when it is longer than the sheet's bounding-box
+//! diagonal). That length test also flags a large hole with a jagged ring in a closed surface,
+//! so a flagged loop is taken for the border only if it also spans the sheet: its own
+//! bounding-box diagonal is at least half the component's. A loop is left open when it is the
+//! border (unless `keep_border` is off) or when its size exceeds `max_size` (an opening by
+//! design).
 //! Twisted loops, which pass a vertex more than once, are cut at the repeated vertices into
 //! simple loops, each filled on its own.
 
@@ -46,8 +50,38 @@ pub fn detect_holes(
     keep_border: bool,
     max_size: Option<f64>,
 ) -> Vec<DetectedLoop> {
+    // Bounding-box diagonal of each component.
+    let mut boxes: Vec<Option<crate::mesh::Aabb>> = vec![None; topo.components.len()];
+    for (fi, f) in mesh.faces.iter().enumerate() {
+        let Some(&c) = topo.face_component.get(fi) else {
+            continue;
+        };
+        for &v in f {
+            let p = mesh.positions[v as usize];
+            let b = boxes[c as usize].get_or_insert(crate::mesh::Aabb { min: p, max: p });
+            b.min = b.min.inf(&p);
+            b.max = b.max.sup(&p);
+        }
+    }
+    let comp_diag = |c: u32| {
+        boxes
+            .get(c as usize)
+            .copied()
+            .flatten()
+            .map(|b| b.diagonal())
+            .unwrap_or(0.0)
+    };
     let mut out = Vec::new();
     for (li, lp) in topo.loops.iter().enumerate() {
+        let whole_size = crate::mesh::Aabb::of(
+            &lp.vertices
+                .iter()
+                .map(|&v| mesh.positions[v as usize])
+                .collect::<Vec<_>>(),
+        )
+        .map(|b| b.diagonal())
+        .unwrap_or(0.0);
+        let border = lp.outer_border && whole_size >= 0.5 * comp_diag(lp.component);
         let parts = if lp.twisted {
             split_twisted(&lp.vertices)
         } else {
@@ -61,7 +95,7 @@ pub fn detect_holes(
             let size = crate::mesh::Aabb::of(&pts)
                 .map(|b| b.diagonal())
                 .unwrap_or(0.0);
-            let kind = if lp.outer_border && keep_border {
+            let kind = if border && keep_border {
                 LoopKind::OuterBorder
             } else if max_size.is_some_and(|m| size > m) {
                 LoopKind::TooLarge
@@ -125,6 +159,18 @@ mod tests {
         assert_eq!(parts, vec![vec![1, 2, 3], vec![0, 1, 4, 5]]);
         // Simple walk stays whole.
         assert_eq!(split_twisted(&[5, 6, 7, 8]), vec![vec![5, 6, 7, 8]]);
+    }
+
+    #[test]
+    fn large_jagged_hole_in_a_closed_surface_is_a_hole() {
+        // A coarse sphere with a cap cut off: the ring is longer than the bounding-box
+        // diagonal (Topology flags it), but spans only part of the sphere.
+        let s = crate::holes::testing::cube_sphere(12, 1.0);
+        let cut = crate::holes::cut::cut_ball(&s, &nalgebra::Point3::new(0.0, 0.0, 1.0), 0.4);
+        let t = Topology::build(&cut);
+        assert!(t.loops[0].outer_border);
+        let d = detect_holes(&cut, &t, true, None);
+        assert_eq!(d[0].kind, LoopKind::Hole);
     }
 
     #[test]

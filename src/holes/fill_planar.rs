@@ -171,10 +171,14 @@ pub fn fill_planar(
     Ok(projection)
 }
 
-/// Circular-arc smoothing sweeps, each kept only if it makes the fill cut through itself no more
-/// than before (on creases and noisy borders the normals disagree, and smoothing can fold the
-/// fill); the first sweep that does is undone and smoothing stops.
+/// Circular-arc smoothing sweeps that may not make the fill cut through itself more than before
+/// (on creases and noisy borders the normals disagree, and smoothing can fold the fill). All
+/// sweeps are tried at once; when that folds, they are redone one at a time, each kept only if
+/// it does not.
 fn smooth_without_folding(patch: &mut Patch, iterations: usize) {
+    if iterations == 0 {
+        return;
+    }
     let crossings = |p: &Patch| {
         let m = crate::mesh::Mesh {
             positions: p.positions.clone(),
@@ -183,16 +187,23 @@ fn smooth_without_folding(patch: &mut Patch, iterations: usize) {
         };
         super::intersect::fill_intersections(&m, 0).len()
     };
-    let mut before = crossings(patch);
+    let before = crossings(patch);
+    let saved = patch.positions.clone();
+    arc_smooth(patch, iterations);
+    if crossings(patch) <= before {
+        return;
+    }
+    patch.positions = saved;
+    if iterations == 1 {
+        return;
+    }
     for _ in 0..iterations {
-        let saved = patch.positions.clone();
+        let step = patch.positions.clone();
         arc_smooth(patch, 1);
-        let after = crossings(patch);
-        if after > before {
-            patch.positions = saved;
+        if crossings(patch) > before {
+            patch.positions = step;
             break;
         }
-        before = after;
     }
 }
 

@@ -173,13 +173,15 @@ pub fn fill_on_surface(
         &mut chord,
     )?;
     delaunay_flips(patch, 20);
-    relax_on_surface(patch, surface, opts.relax_iterations, max_dist, tol);
-    for v in n as usize..patch.positions.len() {
-        if let Some(g) = unit_gradient(surface, &patch.positions[v]) {
-            patch.normals[v] = g;
+    let settled = relax_on_surface(patch, surface, opts.relax_iterations, max_dist, tol);
+    for (v, &ok) in settled.iter().enumerate().skip(n as usize) {
+        if !ok {
+            if let Some(g) = unit_gradient(surface, &patch.positions[v]) {
+                patch.normals[v] = g;
+            }
         }
     }
-    check_orientation(patch, surface)?;
+    check_orientation(patch)?;
     Ok(FillInfo { projection })
 }
 
@@ -191,22 +193,17 @@ fn unit_gradient(f: &dyn Implicit, x: &Point3<f64>) -> Option<Vector3<f64>> {
 }
 
 /// Every fill face with a projected node must face the way the surface's gradient points
-/// (outward); a face that does not is a fold. Faces of ring vertices only are left to the
+/// (outward) at its vertices (the new vertices' normals are the unit gradients); a face that
+/// does not is a fold. Faces of ring vertices only are left to the
 /// self-intersection check: their shape is the ring's, not the projection's, and where the ring
 /// itself doubles back (a small bump cut in half) they can face any way without folding.
-fn check_orientation(patch: &Patch, surface: &dyn Implicit) -> Result<()> {
+fn check_orientation(patch: &Patch) -> Result<()> {
     for f in &patch.faces {
         if f.iter().all(|&v| patch.is_fixed(v)) {
             continue;
         }
-        let c = Point3::from(
-            (patch.positions[f[0] as usize].coords
-                + patch.positions[f[1] as usize].coords
-                + patch.positions[f[2] as usize].coords)
-                / 3.0,
-        );
         let nf = patch.face_cross(f);
-        let g = surface.gradient(&c);
+        let g: Vector3<f64> = f.iter().map(|&v| patch.normals[v as usize]).sum();
         if !(nf.dot(&g) > 0.0) {
             return Err(Error::Numerical(
                 "the projected fill folds over (a face points against the surface normal)".into(),

@@ -8,7 +8,7 @@
 //! Delaunay), unless c-d already exists (in the patch or, between ring vertices, in the mesh) or
 //! the flip would fold the surface.
 
-use super::patch::{key, Patch};
+use super::patch::{key, EdgeUse, Patch};
 use std::collections::HashSet;
 
 /// Angle at `p` in triangle p, q, r.
@@ -28,15 +28,15 @@ pub fn delaunay_flips(patch: &mut Patch, max_rounds: usize) -> usize {
     let mut total = 0;
     for _ in 0..max_rounds {
         let edges = patch.edge_faces();
-        let existing: HashSet<(u32, u32)> = edges.keys().copied().collect();
         let mut touched = vec![false; patch.faces.len()];
         let mut flips = 0;
         let mut created: HashSet<(u32, u32)> = HashSet::new();
-        for (&(a, b), fs) in &edges {
-            if fs.len() != 2 {
+        for e in &edges {
+            if e.count != 2 {
                 continue;
             }
-            let (f1, f2) = (fs[0] as usize, fs[1] as usize);
+            let (a, b) = e.key;
+            let (f1, f2) = (e.faces[0] as usize, e.faces[1] as usize);
             if touched[f1] || touched[f2] {
                 continue;
             }
@@ -64,7 +64,10 @@ pub fn delaunay_flips(patch: &mut Patch, max_rounds: usize) -> usize {
                 continue;
             }
             let cd = key(c, d);
-            if existing.contains(&cd) || created.contains(&cd) || patch.is_mesh_edge(c, d) {
+            if EdgeUse::find(&edges, cd).is_some()
+                || created.contains(&cd)
+                || patch.is_mesh_edge(c, d)
+            {
                 continue;
             }
             // New faces (a, d, c) and (d, b, c); they must face the way the old pair did.

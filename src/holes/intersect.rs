@@ -18,7 +18,11 @@ use std::collections::{HashMap, HashSet};
 type Tri = [Point3<f64>; 3];
 
 /// Pairs (fill face, other face) that intersect, for the faces `first_fill..` of `mesh` against
-/// every face of `mesh` (fill faces pairwise once). Face indices into `mesh.faces`.
+/// every face of `mesh` (fill faces pairwise once), sorted. Face indices into `mesh.faces`.
+///
+/// Candidates come from a uniform grid over the fill's box (cells about twice the mean fill
+/// edge), held as a sorted list of (cell, face) entries; a pair is tested only in the first
+/// cell the two faces share, so no pair is tested twice.
 pub fn fill_intersections(mesh: &Mesh, first_fill: usize) -> Vec<(u32, u32)> {
     let nf = mesh.faces.len();
     if first_fill >= nf {
@@ -32,7 +36,6 @@ pub fn fill_intersections(mesh: &Mesh, first_fill: usize) -> Vec<(u32, u32)> {
             mesh.positions[t[2] as usize],
         ]
     };
-    // Grid over the fill's box (slightly enlarged); cell about twice the mean fill edge.
     let mut lo = Point3::from(Vector3::repeat(f64::INFINITY));
     let mut hi = Point3::from(Vector3::repeat(f64::NEG_INFINITY));
     let mut edge_sum = 0.0;
@@ -44,15 +47,24 @@ pub fn fill_intersections(mesh: &Mesh, first_fill: usize) -> Vec<(u32, u32)> {
             edge_sum += (t[k] - t[(k + 1) % 3]).norm();
         }
     }
-    let cell = (2.0 * edge_sum / (3 * (nf - first_fill)) as f64).max(1e-12);
-    let pad = Vector3::repeat(cell);
-    let (lo, hi) = (lo - pad, hi + pad);
+    let mut cell = (2.0 * edge_sum / (3 * (nf - first_fill)) as f64).max(1e-12);
+    let (lo, hi) = (lo - Vector3::repeat(cell), hi + Vector3::repeat(cell));
+    // Keep the grid's cell count within u64 keys (and sane).
+    while ((hi - lo) / cell)
+        .iter()
+        .map(|d| d.ceil() + 1.0)
+        .product::<f64>()
+        > 1e15
+    {
+        cell *= 2.0;
+    }
+    let dims: [i64; 3] = std::array::from_fn(|k| ((hi[k] - lo[k]) / cell).ceil() as i64 + 1);
     let cell_of = |p: &Point3<f64>| -> [i64; 3] {
-        let d = (p - lo) / cell;
-        [d.x.floor() as i64, d.y.floor() as i64, d.z.floor() as i64]
+        std::array::from_fn(|k| (((p[k] - lo[k]) / cell).floor() as i64).clamp(0, dims[k] - 1))
     };
-    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
-    for f in 0..nf {
+    let linear = |c: [i64; 3]| ((c[0] * dims[1] + c[1]) * dims[2] + c[2]) as u64;
+    // Cell range of a face, `None` outside the box.
+    let range = |f: usize| -> Option<([i64; 3], [i64; 3])> {
         let t = tri(f);
         let (mut a, mut b) = (t[0], t[0]);
         for p in &t {
@@ -60,42 +72,61 @@ pub fn fill_intersections(mesh: &Mesh, first_fill: usize) -> Vec<(u32, u32)> {
             b = b.sup(p);
         }
         if b.x < lo.x || b.y < lo.y || b.z < lo.z || a.x > hi.x || a.y > hi.y || a.z > hi.z {
-            continue;
+            return None;
         }
-        let (ca, cb) = (cell_of(&a.sup(&lo)), cell_of(&b.inf(&hi)));
-        for i in ca[0]..=cb[0] {
-            for j in ca[1]..=cb[1] {
-                for k in ca[2]..=cb[2] {
-                    grid.entry([i, j, k]).or_default().push(f as u32);
+        Some((cell_of(&a), cell_of(&b)))
+    };
+    // Faces in the box with their lowest cell; entries (cell, slot in `inbox`).
+    let mut inbox: Vec<(u32, [i64; 3])> = Vec::new();
+    let mut entries: Vec<(u64, u32)> = Vec::new();
+    for f in 0..nf {
+        if let Some((ca, cb)) = range(f) {
+            let slot = inbox.len() as u32;
+            inbox.push((f as u32, ca));
+            for i in ca[0]..=cb[0] {
+                for j in ca[1]..=cb[1] {
+                    for k in ca[2]..=cb[2] {
+                        entries.push((linear([i, j, k]), slot));
+                    }
                 }
             }
         }
     }
-    let mut pairs = std::collections::BTreeSet::new();
-    let mut checked = std::collections::HashSet::new();
-    let mut cells: Vec<_> = grid.into_iter().collect();
-    cells.sort_by_key(|a| a.0);
-    for (_, faces) in &cells {
-        for &f in faces {
+    entries.sort_unstable();
+    let mut pairs = Vec::new();
+    let mut start = 0;
+    while start < entries.len() {
+        let key = entries[start].0;
+        let mut end = start;
+        while end < entries.len() && entries[end].0 == key {
+            end += 1;
+        }
+        let group = &entries[start..end];
+        for &(_, sf) in group {
+            let (f, fa) = inbox[sf as usize];
             if (f as usize) < first_fill {
                 continue;
             }
-            for &g in faces {
-                if g == f {
+            for &(_, sg) in group {
+                let (g, ga) = inbox[sg as usize];
+                let g_fill = (g as usize) >= first_fill;
+                if g == f || (g_fill && g < f) {
                     continue;
                 }
-                let key = if (g as usize) >= first_fill {
-                    (f.min(g), f.max(g))
-                } else {
-                    (f, g)
-                };
-                if checked.insert(key) && faces_intersect(mesh, f as usize, g as usize) {
-                    pairs.insert(key);
+                // Test each pair once: in the first cell both faces cover.
+                let first = std::array::from_fn(|k| fa[k].max(ga[k]));
+                if linear(first) != key {
+                    continue;
+                }
+                if faces_intersect(mesh, f as usize, g as usize) {
+                    pairs.push(if g_fill { (f.min(g), f.max(g)) } else { (f, g) });
                 }
             }
         }
+        start = end;
     }
-    pairs.into_iter().collect()
+    pairs.sort_unstable();
+    pairs
 }
 
 /// Intersecting pairs between a hole's fill and the mesh near it (the faces reached from the

@@ -218,7 +218,8 @@ pub struct HoleReport {
     pub planes: Vec<PlaneKind>,
     pub vertices_added: usize,
     pub triangles_added: usize,
-    /// Largest |f| / |grad f| of the fill's vertices and face centroids for the local RBF f.
+    /// Largest |f| / |grad f| over the fill's face centroids and new vertices, f the local RBF
+    /// surface (the vertices are on it by construction with the RBF method, and not measured).
     pub max_deviation: Option<f64>,
     /// Root mean square of the same.
     pub rms_deviation: Option<f64>,
@@ -511,7 +512,7 @@ impl Context<'_> {
         hr.self_intersections = crossings;
         if o.measure_deviation && hr.max_deviation.is_none() {
             if let Ok(surface) = self.fit_surface(l, target) {
-                measure(&patch, &surface, hr);
+                measure(&patch, &surface, true, hr);
             }
         }
         Ok(patch)
@@ -557,7 +558,7 @@ impl Context<'_> {
                 )?;
                 hr.planes = info.projection.planes;
                 if o.measure_deviation {
-                    measure(&p, &surface, hr);
+                    measure(&p, &surface, false, hr);
                 }
             }
             FillMethod::Planar | FillMethod::Flat => {
@@ -584,12 +585,17 @@ fn method_name(m: FillMethod) -> &'static str {
     }
 }
 
-/// Deviation of the fill from `surface` at its new vertices and all its face centroids.
-fn measure(p: &Patch, surface: &dyn Implicit, hr: &mut HoleReport) {
-    let mut d: Vec<f64> = p.positions[p.ring_len()..]
-        .iter()
-        .map(|x| newton_project::distance_estimate(surface, x))
-        .collect();
+/// Deviation of the fill from `surface` at its face centroids and, with `vertices`, its new
+/// vertices (which the RBF method has put on the surface already).
+fn measure(p: &Patch, surface: &dyn Implicit, vertices: bool, hr: &mut HoleReport) {
+    let mut d: Vec<f64> = if vertices {
+        p.positions[p.ring_len()..]
+            .iter()
+            .map(|x| newton_project::distance_estimate(surface, x))
+            .collect()
+    } else {
+        Vec::with_capacity(p.faces.len())
+    };
     for f in &p.faces {
         let c = nalgebra::Point3::from(
             (p.positions[f[0] as usize].coords

@@ -79,6 +79,16 @@ pub fn project_gradient(
     max_dist: f64,
     tol: f64,
 ) -> Option<Point3<f64>> {
+    project_gradient_with_normal(f, x0, max_dist, tol).map(|(x, _)| x)
+}
+
+/// [`project_gradient`], also returning grad f at the result (evaluated there anyway).
+pub fn project_gradient_with_normal(
+    f: &dyn Implicit,
+    x0: &Point3<f64>,
+    max_dist: f64,
+    tol: f64,
+) -> Option<(Point3<f64>, Vector3<f64>)> {
     let mut x = *x0;
     let (mut fv, mut g) = f.value_and_gradient(&x);
     for _ in 0..MAX_ITER {
@@ -86,7 +96,7 @@ pub fn project_gradient(
             return None;
         }
         if fv.abs() <= tol {
-            return Some(x);
+            return Some((x, g));
         }
         let g2 = g.norm_squared();
         if !(g2 > 1e-24) {
@@ -112,7 +122,7 @@ pub fn project_gradient(
             return None;
         }
     }
-    (fv.abs() <= tol * 10.0).then_some(x)
+    (fv.abs() <= tol * 10.0).then_some((x, g))
 }
 
 /// Distance estimate |f| / |grad f| of `x` from the surface.

@@ -6,7 +6,7 @@
 //! oriented.
 
 use nalgebra::{Point3, Vector3};
-use std::collections::{BTreeMap, HashSet};
+use std::collections::HashSet;
 
 /// The fill of one hole.
 #[derive(Debug, Clone, Default)]
@@ -25,6 +25,26 @@ pub struct Patch {
     /// as its border), and the ends of chords along which a folded ring was cut. An edge with
     /// three faces would be non-manifold.
     pub mesh_edges: HashSet<(u32, u32)>,
+}
+
+/// An undirected edge of a patch and the faces using it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct EdgeUse {
+    /// Endpoints, smaller first.
+    pub key: (u32, u32),
+    /// The first two faces using it (`u32::MAX` when fewer).
+    pub faces: [u32; 2],
+    /// How many faces use it.
+    pub count: u32,
+}
+
+impl EdgeUse {
+    /// The entry of edge `k` in a list from [`Patch::edge_faces`].
+    pub fn find(list: &[EdgeUse], k: (u32, u32)) -> Option<&EdgeUse> {
+        list.binary_search_by(|e| e.key.cmp(&k))
+            .ok()
+            .map(|i| &list[i])
+    }
 }
 
 /// Sorted pair.
@@ -76,18 +96,33 @@ impl Patch {
         self.mesh_edges.contains(&key(a, b))
     }
 
-    /// Undirected edges of the fill's faces, each with the faces using it, in sorted order (a
-    /// `BTreeMap` so that every pass over the edges is deterministic).
-    pub fn edge_faces(&self) -> BTreeMap<(u32, u32), Vec<u32>> {
-        let mut m: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
+    /// Undirected edges of the fill's faces with the faces using them, sorted by edge (so that
+    /// every pass over the edges is deterministic, and [`EdgeUse::find`] can bisect).
+    pub fn edge_faces(&self) -> Vec<EdgeUse> {
+        let mut half: Vec<((u32, u32), u32)> = Vec::with_capacity(3 * self.faces.len());
         for (fi, f) in self.faces.iter().enumerate() {
             for k in 0..3 {
-                m.entry(key(f[k], f[(k + 1) % 3]))
-                    .or_default()
-                    .push(fi as u32);
+                half.push((key(f[k], f[(k + 1) % 3]), fi as u32));
             }
         }
-        m
+        half.sort_unstable();
+        let mut out: Vec<EdgeUse> = Vec::with_capacity(half.len() / 2 + 1);
+        for (k, f) in half {
+            match out.last_mut() {
+                Some(e) if e.key == k => {
+                    if e.count < 2 {
+                        e.faces[e.count as usize] = f;
+                    }
+                    e.count += 1;
+                }
+                _ => out.push(EdgeUse {
+                    key: k,
+                    faces: [f, u32::MAX],
+                    count: 1,
+                }),
+            }
+        }
+        out
     }
 
     /// Sorted, deduplicated neighbours of every local vertex through the fill's faces.
@@ -146,19 +181,20 @@ impl Patch {
                 }
             }
         }
-        for (&(a, b), faces) in &self.edge_faces() {
+        for e in &self.edge_faces() {
+            let (a, b) = e.key;
             let ring_edge = a < n && b < n && ((a + 1) % n == b || (b + 1) % n == a);
             if ring_edge {
                 // The fill walks the ring i -> i+1.
                 let (s, t) = if (a + 1) % n == b { (a, b) } else { (b, a) };
-                if faces.len() != 1 || !directed.contains(&(s, t)) {
+                if e.count != 1 || !directed.contains(&(s, t)) {
                     return Err(format!("ring edge {s}->{t} not used exactly once"));
                 }
             } else {
-                if faces.len() != 2 {
+                if e.count != 2 {
                     return Err(format!(
                         "inner edge {a}-{b} has {} faces, expected 2",
-                        faces.len()
+                        e.count
                     ));
                 }
                 if self.is_mesh_edge(a, b) {

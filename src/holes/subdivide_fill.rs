@@ -24,8 +24,9 @@ pub fn refine(
 ) -> usize {
     let edges = patch.edge_faces();
     let mut mids: BTreeMap<(u32, u32), u32> = BTreeMap::new();
-    for (&(a, b), faces) in &edges {
-        if faces.len() == 2 && split(patch, a, b) {
+    for e in &edges {
+        let (a, b) = e.key;
+        if e.count == 2 && split(patch, a, b) {
             let (p, n) = midpoint(patch, a, b);
             let v = patch.add_vertex(p, n);
             mids.insert((a, b), v);
