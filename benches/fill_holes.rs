@@ -4,7 +4,8 @@
 //!     cargo bench --bench fill_holes
 //!
 //! Prints the best of several runs for each method. Figures go to docs/BENCHMARKS.md under
-//! "## fill-holes".
+//! "## fill-holes". With `FILL_HOLES_BENCH_MESH=path.ply` the cut sphere is also written there,
+//! for the peer comparison `scripts/peer_close_holes.py`.
 
 use nalgebra::{Point3, Vector3};
 use scansurf::holes::cut::cut_balls;
@@ -81,6 +82,9 @@ fn main() {
         .collect();
     let cut = cut_balls(&sphere, &balls);
     let loops = cut.topology().loops.len();
+    if let Ok(path) = std::env::var("FILL_HOLES_BENCH_MESH") {
+        scansurf::io::write_mesh(Path::new(&path), &cut, Default::default()).expect("write");
+    }
     println!(
         "sphere: {} triangles, {} holes cut (built in {:.1} s)",
         cut.faces.len(),
