@@ -696,6 +696,36 @@ mod tests {
         assert_eq!(out, cut);
     }
 
+    /// Two holes touching at a vertex (a pinched, "twisted" boundary there) in an open sheet:
+    /// both close, the sheet's border stays open, and the shared vertex becomes manifold.
+    #[test]
+    fn holes_touching_at_a_vertex_in_an_open_sheet() {
+        let n = 12;
+        let mut m = testing::saddle(n, 1.0, 0.2);
+        let quad = |i: usize, j: usize| 2 * (j * n + i);
+        // Squares (5,5) and (6,6) share the grid vertex (6,6).
+        let (a, b) = (quad(5, 5), quad(6, 6));
+        m.faces.drain(b..b + 2);
+        m.faces.drain(a..a + 2);
+        let before = m.topology();
+        assert_eq!(before.non_manifold_vertices.len(), 1);
+        for method in [FillMethod::Rbf, FillMethod::Planar] {
+            let opts = FillOptions {
+                method,
+                fallback: false,
+                ..Default::default()
+            };
+            let (out, rep) = fill_holes(&m, &opts).unwrap();
+            assert_eq!(rep.holes_filled, 2, "{method:?}: {rep:#?}");
+            assert_eq!(rep.holes_left_open, 1);
+            let t = out.topology();
+            assert_eq!(t.loops.len(), 1, "{method:?}");
+            assert!(t.loops[0].outer_border);
+            assert!(t.non_manifold_vertices.is_empty() && t.non_manifold_edges.is_empty());
+            assert_eq!(t.misoriented_edges, 0);
+        }
+    }
+
     /// Another surface fitter plugs in: here the exact sphere, whatever the samples.
     #[test]
     fn custom_fitter_is_used() {
