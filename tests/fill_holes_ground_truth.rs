@@ -108,6 +108,10 @@ fn on_sphere(v: Vector3<f64>) -> Point3<f64> {
 }
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "about 100 s unoptimized; CI runs it with --release (scripts/test.sh), 2-5 s"
+)]
 fn sphere_round_elongated_and_l_shaped_holes() {
     let s = cube_sphere(60, 1.0);
     let dist = |p: &Point3<f64>| (p.coords.norm() - 1.0).abs();
@@ -134,6 +138,10 @@ fn sphere_round_elongated_and_l_shaped_holes() {
 }
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "about 100 s unoptimized; CI runs it with --release (scripts/test.sh), 2-5 s"
+)]
 fn torus_outer_inner_and_elongated_holes() {
     let (big, small) = (2.0, 0.7);
     let t = torus(big, small, 320, 128);
@@ -166,6 +174,10 @@ fn torus_outer_inner_and_elongated_holes() {
 }
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "about 100 s unoptimized; CI runs it with --release (scripts/test.sh), 2-5 s"
+)]
 fn saddle_round_and_non_convex_holes() {
     let k = 0.5;
     let s = saddle(120, 1.0, k);

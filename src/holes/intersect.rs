@@ -247,6 +247,17 @@ fn touching_at_vertex(t: &Tri, i: usize, o: &Tri, j: usize) -> bool {
     let (u, w) = (t[(i + 1) % 3], t[(i + 2) % 3]);
     let scale = (u - s).norm().max((w - s).norm());
     let eps = 1e-9;
+    // The usual case: t's other two vertices strictly on one side of o's plane, so t meets that
+    // plane only at the shared vertex.
+    let n = (o[1] - o[0]).cross(&(o[2] - o[0]));
+    let nl = n.norm();
+    if nl > 0.0 {
+        let (du, dw) = ((u - s).dot(&n) / nl, (w - s).dot(&n) / nl);
+        let tiny = 1e-12 * scale;
+        if (du > tiny && dw > tiny) || (du < -tiny && dw < -tiny) {
+            return false;
+        }
+    }
     // The opposite edge of t crossing o.
     if segment_hits_triangle(&u, &w, o, eps).is_some() {
         return true;
@@ -296,10 +307,19 @@ pub fn triangles_intersect(a: &Tri, b: &Tri) -> bool {
     let la = na.norm();
     let size = (a[1] - a[0]).norm().max((b[1] - b[0]).norm());
     if la > 0.0 {
-        let dist: Vec<f64> = b.iter().map(|p| (p - a[0]).dot(&na) / la).collect();
+        let dist: [f64; 3] = std::array::from_fn(|k| (b[k] - a[0]).dot(&na) / la);
         if dist.iter().all(|d| d.abs() <= 1e-12 * size) {
             return coplanar_overlap(a, b, &na);
         }
+        if dist.iter().all(|&d| d > 1e-12 * size) || dist.iter().all(|&d| d < -1e-12 * size) {
+            return false;
+        }
+    }
+    // And a against b's plane.
+    let nb = (b[1] - b[0]).cross(&(b[2] - b[0]));
+    let lb = nb.norm();
+    if lb > 0.0 {
+        let dist: [f64; 3] = std::array::from_fn(|k| (a[k] - b[0]).dot(&nb) / lb);
         if dist.iter().all(|&d| d > 1e-12 * size) || dist.iter().all(|&d| d < -1e-12 * size) {
             return false;
         }

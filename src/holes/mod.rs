@@ -248,10 +248,41 @@ pub struct FillReport {
     pub holes: Vec<HoleReport>,
 }
 
+/// Fits the implicit surface of one hole: interpolation points and their values (0 on the
+/// surface, positive offsets outside; seed 000 eq. 1-2). The default is
+/// [`rbf_local::fit_hole_rbf`]; any interpolant will do (e.g. the shared `implicit::rbf`).
+pub type SurfaceFitter =
+    dyn Fn(&[nalgebra::Point3<f64>], &[f64]) -> Result<Box<dyn Implicit>> + Sync;
+
+/// The default [`SurfaceFitter`]: the local thin-plate RBF.
+pub fn default_fitter(
+    points: &[nalgebra::Point3<f64>],
+    values: &[f64],
+) -> Result<Box<dyn Implicit>> {
+    if points.len() > rbf_local::MAX_POINTS {
+        return Err(Error::Degenerate(format!(
+            "the hole's neighbourhood has {} interpolation points, more than the local RBF \
+             takes ({}); use the planar method or fewer rings",
+            points.len(),
+            rbf_local::MAX_POINTS
+        )));
+    }
+    Ok(Box::new(rbf_local::fit_hole_rbf(points, values)?))
+}
+
 /// Fills the holes of `mesh` (see the module doc). Errors: a mesh without faces, non-finite
 /// coordinates, face indices out of range, invalid options. A hole that cannot be filled is
 /// reported as failed and left open; it is not an error.
 pub fn fill_holes(mesh: &Mesh, opts: &FillOptions) -> Result<(Mesh, FillReport)> {
+    fill_holes_with(mesh, opts, &default_fitter)
+}
+
+/// [`fill_holes`] with another surface fitter for the RBF method and the deviation measure.
+pub fn fill_holes_with(
+    mesh: &Mesh,
+    opts: &FillOptions,
+    fitter: &SurfaceFitter,
+) -> Result<(Mesh, FillReport)> {
     let t0 = Instant::now();
     opts.validate()?;
     validate_mesh(mesh)?;
@@ -264,6 +295,7 @@ pub fn fill_holes(mesh: &Mesh, opts: &FillOptions) -> Result<(Mesh, FillReport)>
         normals: &normals,
         vf: &vf,
         opts,
+        fitter,
     };
     let outcomes: Vec<(HoleReport, Option<Patch>)> = if opts.parallel {
         loops.par_iter().map(|l| ctx.process(l)).collect()
@@ -358,6 +390,7 @@ struct Context<'a> {
     normals: &'a [Vector3<f64>],
     vf: &'a VertexFaces,
     opts: &'a FillOptions,
+    fitter: &'a SurfaceFitter,
 }
 
 impl Context<'_> {
@@ -445,7 +478,7 @@ impl Context<'_> {
     }
 
     /// Fits the local surface of a hole (seed 000 section 2.1).
-    fn fit_surface(&self, l: &DetectedLoop, target: f64) -> Result<impl Implicit> {
+    fn fit_surface(&self, l: &DetectedLoop, target: f64) -> Result<Box<dyn Implicit>> {
         let (pts, vals) = fill_rbf::hole_samples(
             self.mesh,
             self.normals,
@@ -455,15 +488,7 @@ impl Context<'_> {
             self.opts.rbf.offset * target,
             self.opts.fit_normals,
         );
-        if pts.len() > rbf_local::MAX_POINTS {
-            return Err(Error::Degenerate(format!(
-                "the hole's neighbourhood has {} interpolation points, more than the local RBF \
-                 takes ({}); use the planar method or fewer rings",
-                pts.len(),
-                rbf_local::MAX_POINTS
-            )));
-        }
-        rbf_local::fit_hole_rbf(&pts, &vals)
+        (self.fitter)(&pts, &vals)
     }
 
     /// Fills with the requested method, falling back to the other one on failure. A fill must
@@ -512,7 +537,7 @@ impl Context<'_> {
         hr.self_intersections = crossings;
         if o.measure_deviation && hr.max_deviation.is_none() {
             if let Ok(surface) = self.fit_surface(l, target) {
-                measure(&patch, &surface, true, hr);
+                measure(&patch, surface.as_ref(), true, hr);
             }
         }
         Ok(patch)
@@ -550,7 +575,7 @@ impl Context<'_> {
                 let surface = self.fit_surface(l, target)?;
                 let info = fill_rbf::fill_on_surface(
                     &mut p,
-                    &surface,
+                    surface.as_ref(),
                     target,
                     l.size,
                     o.direction,
@@ -558,7 +583,7 @@ impl Context<'_> {
                 )?;
                 hr.planes = info.projection.planes;
                 if o.measure_deviation {
-                    measure(&p, &surface, false, hr);
+                    measure(&p, surface.as_ref(), false, hr);
                 }
             }
             FillMethod::Planar | FillMethod::Flat => {
@@ -669,5 +694,57 @@ mod tests {
         let (out, rep) = fill_holes(&cut, &opts).unwrap();
         assert_eq!(rep.holes[0].status, HoleStatus::TooLarge);
         assert_eq!(out, cut);
+    }
+
+    /// Two holes touching at a vertex (a pinched, "twisted" boundary there) in an open sheet:
+    /// both close, the sheet's border stays open, and the shared vertex becomes manifold.
+    #[test]
+    fn holes_touching_at_a_vertex_in_an_open_sheet() {
+        let n = 12;
+        let mut m = testing::saddle(n, 1.0, 0.2);
+        let quad = |i: usize, j: usize| 2 * (j * n + i);
+        // Squares (5,5) and (6,6) share the grid vertex (6,6).
+        let (a, b) = (quad(5, 5), quad(6, 6));
+        m.faces.drain(b..b + 2);
+        m.faces.drain(a..a + 2);
+        let before = m.topology();
+        assert_eq!(before.non_manifold_vertices.len(), 1);
+        for method in [FillMethod::Rbf, FillMethod::Planar] {
+            let opts = FillOptions {
+                method,
+                fallback: false,
+                ..Default::default()
+            };
+            let (out, rep) = fill_holes(&m, &opts).unwrap();
+            assert_eq!(rep.holes_filled, 2, "{method:?}: {rep:#?}");
+            assert_eq!(rep.holes_left_open, 1);
+            let t = out.topology();
+            assert_eq!(t.loops.len(), 1, "{method:?}");
+            assert!(t.loops[0].outer_border);
+            assert!(t.non_manifold_vertices.is_empty() && t.non_manifold_edges.is_empty());
+            assert_eq!(t.misoriented_edges, 0);
+        }
+    }
+
+    /// Another surface fitter plugs in: here the exact sphere, whatever the samples.
+    #[test]
+    fn custom_fitter_is_used() {
+        struct Sphere;
+        impl Implicit for Sphere {
+            fn value(&self, x: &Point3<f64>) -> f64 {
+                x.coords.norm() - 1.0
+            }
+        }
+        let s = cube_sphere(16, 1.0);
+        let cut = cut_ball(&s, &Point3::new(0.0, 0.0, 1.0), 0.5);
+        let fitter =
+            |_: &[Point3<f64>], _: &[f64]| -> Result<Box<dyn Implicit>> { Ok(Box::new(Sphere)) };
+        let (out, rep) = fill_holes_with(&cut, &FillOptions::default(), &fitter).unwrap();
+        assert_eq!(rep.holes_filled, 1);
+        let worst = out.positions[cut.positions.len()..]
+            .iter()
+            .map(|p| (p.coords.norm() - 1.0).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-6, "{worst}");
     }
 }

@@ -14,9 +14,10 @@
 //! depend on the thread count.
 //!
 //! **Temporary**: the shared `implicit::rbf` module (another branch) will provide the same
-//! interpolant with domain decomposition. Everything in `holes` takes a `&dyn Implicit`; to
-//! switch, replace the body of [`fit_hole_rbf`] by a call to the shared fitter (same inputs:
-//! centres and values) and delete this file.
+//! interpolant with domain decomposition. Everything in `holes` works on a `&dyn Implicit`, and
+//! the fitter is a parameter: to switch, pass the shared fitter to
+//! [`super::fill_holes_with`] or make [`super::default_fitter`] call it (same inputs: centres
+//! and values), then delete this file.
 //!
 //! Conditioning: the points are centred and scaled into the unit ball before the solve. The
 //! thin-plate kernel changes under scaling only by a multiple of `r^2`, which the side conditions
