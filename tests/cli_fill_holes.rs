@@ -15,8 +15,19 @@ fn bunny_holes_close_and_originals_stay() {
         let out = dir.path().join(format!("{method}.ply"));
         let rep = dir.path().join(format!("{method}.json"));
         let o = Command::new(env!("CARGO_BIN_EXE_scansurf"))
-            .args(["fill-holes", bunny.to_str().unwrap(), "-o", out.to_str().unwrap()])
-            .args(["--method", method, "--report", rep.to_str().unwrap(), "--quiet"])
+            .args([
+                "fill-holes",
+                bunny.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ])
+            .args([
+                "--method",
+                method,
+                "--report",
+                rep.to_str().unwrap(),
+                "--quiet",
+            ])
             .output()
             .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -37,7 +48,12 @@ fn bad_method_and_clouds() {
     let spot = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/spot.obj");
     let out = dir.path().join("o.ply");
     let o = Command::new(env!("CARGO_BIN_EXE_scansurf"))
-        .args(["fill-holes", spot.to_str().unwrap(), "-o", out.to_str().unwrap()])
+        .args([
+            "fill-holes",
+            spot.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
         .args(["--method", "magic"])
         .output()
         .unwrap();
@@ -46,11 +62,19 @@ fn bad_method_and_clouds() {
     let cloud = dir.path().join("c.xyz");
     std::fs::write(&cloud, "0 0 0\n1 0 0\n0 1 0\n").unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_scansurf"))
-        .args(["fill-holes", cloud.to_str().unwrap(), "-o", out.to_str().unwrap()])
+        .args([
+            "fill-holes",
+            cloud.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("c.xyz") && err.contains("point cloud"), "{err}");
+    assert!(
+        err.contains("c.xyz") && err.contains("point cloud"),
+        "{err}"
+    );
     assert!(!out.exists());
 }
