@@ -92,7 +92,6 @@ pub fn arc_smooth(patch: &mut Patch, iterations: usize) {
         return;
     }
     let nb = patch.neighbours();
-    let vf = patch.vertex_faces();
     for _ in 0..iterations {
         let moved: Vec<Option<Point3<f64>>> = (0..patch.positions.len())
             .map(|v| {
@@ -146,7 +145,6 @@ pub fn arc_smooth(patch: &mut Patch, iterations: usize) {
                 patch.positions[v] = old[v];
             }
         }
-        let _ = &vf;
     }
 }
 

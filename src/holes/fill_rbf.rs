@@ -142,8 +142,8 @@ pub fn fill_on_surface(
                             "a fill node has no surface point along the plane normal".into(),
                         )
                     })?;
-                let nrm = unit_gradient(surface, &x).unwrap_or(frame.normal);
-                ids.push(p.add_vertex(x, nrm));
+                // The normal is set from the surface once the nodes have settled.
+                ids.push(p.add_vertex(x, frame.normal));
             }
             for t in &pm.triangles {
                 p.faces.push([ids[t[0]], ids[t[1]], ids[t[2]]]);

@@ -219,7 +219,7 @@ pub fn faces_intersect(mesh: &Mesh, f: usize, g: usize) -> bool {
         0 => triangles_intersect(&ta, &tb),
         1 => {
             let (i, j) = shared[0];
-            touching_at_vertex(&ta, i, &tb, j) || touching_at_vertex(&tb, j, &ta, i)
+            touching_at_vertex(&ta, i, &tb) || touching_at_vertex(&tb, j, &ta)
         }
         2 => {
             // Folded flat onto each other: the two opposite vertices on the same side of the
@@ -241,8 +241,8 @@ pub fn faces_intersect(mesh: &Mesh, f: usize, g: usize) -> bool {
     }
 }
 
-/// Triangles `t` and `o` share vertex `t[i]` = `o[j]`: does `t` reach into `o` elsewhere?
-fn touching_at_vertex(t: &Tri, i: usize, o: &Tri, j: usize) -> bool {
+/// Triangles `t` and `o` share vertex `t[i]`: does `t` reach into `o` elsewhere?
+fn touching_at_vertex(t: &Tri, i: usize, o: &Tri) -> bool {
     let s = t[i];
     let (u, w) = (t[(i + 1) % 3], t[(i + 2) % 3]);
     let scale = (u - s).norm().max((w - s).norm());
@@ -270,7 +270,6 @@ fn touching_at_vertex(t: &Tri, i: usize, o: &Tri, j: usize) -> bool {
             }
         }
     }
-    let _ = j;
     false
 }
 
