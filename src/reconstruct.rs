@@ -158,7 +158,8 @@ pub fn reconstruct(
         ));
     }
     // Spurious sheets beside the surface are the nearest surface for no input point.
-    let min_votes = 3usize.max(op.points.len() / 10_000);
+    // A part with fewer points than half a fit needs is not reconstructible: noise or outliers.
+    let min_votes = (opts.fit.min_points / 2).max(op.points.len() / 5_000);
     let (mut mesh, removed_components) = keep_supported_components(mesh, &op.points, min_votes)?;
     timings.polygonize = t.elapsed().as_secs_f64();
     let (mc_v, mc_f) = (mesh.positions.len(), mesh.faces.len());
@@ -326,24 +327,24 @@ pub(crate) mod tests {
     #[test]
     fn sphere_clean_noisy_and_with_hole() {
         let s = Shape::Sphere(1.0);
-        check(&s, s.sample(3000, 0.0, false), 2);
-        let rep = check(&s, s.sample(3000, 1e-3, false), 2);
+        check(&s, s.sample(2000, 0.0, false), 2);
+        let rep = check(&s, s.sample(2000, 1e-3, false), 2);
         assert!(rep.deviation.unwrap().relative.mean < 2e-4);
-        check(&s, s.sample(3000, 0.0, true), 2);
+        check(&s, s.sample(2000, 0.0, true), 2);
     }
 
     #[test]
     fn torus_clean_noisy_and_with_hole() {
         let t = Shape::Torus(1.0, 0.35);
-        check(&t, t.sample(6000, 0.0, false), 0);
-        check(&t, t.sample(6000, 1e-3, false), 0);
-        check(&t, t.sample(6000, 0.0, true), 0);
+        check(&t, t.sample(4500, 0.0, false), 0);
+        check(&t, t.sample(4500, 5e-4, false), 0);
+        check(&t, t.sample(4500, 0.0, true), 0);
     }
 
     #[test]
     fn sphere_without_normals() {
         let s = Shape::Sphere(1.0);
-        let mut c = s.sample(3000, 0.0, false);
+        let mut c = s.sample(2000, 0.0, false);
         c.normals = None;
         let rep = check(&s, c, 2);
         assert_eq!(rep.normal_source, NormalSource::Estimated);
@@ -351,8 +352,8 @@ pub(crate) mod tests {
 
     #[test]
     fn result_does_not_depend_on_thread_count() {
-        let t = Shape::Torus(1.0, 0.35);
-        let mut c = t.sample(3000, 1e-3, true);
+        let t = Shape::Sphere(1.0);
+        let mut c = t.sample(800, 0.0, true);
         c.normals = None;
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
@@ -367,6 +368,59 @@ pub(crate) mod tests {
         let b = run(3);
         assert_eq!(a.faces, b.faces);
         assert_eq!(a.positions, b.positions);
+    }
+
+    #[test]
+    fn duplicates_outliers_and_far_offsets() {
+        let s = Shape::Sphere(1.0);
+        let base = s.sample(1000, 0.0, false);
+        // Every point three times, plus a few outliers, all far from the origin.
+        let off = nalgebra::Vector3::new(1e5, -2e5, 3e5);
+        let mut pts = Vec::new();
+        let mut nrm = Vec::new();
+        let bn = base.normals.clone().unwrap();
+        for (p, n) in base.positions.iter().zip(&bn) {
+            for _ in 0..3 {
+                pts.push(p + off);
+                nrm.push(*n);
+            }
+        }
+        for k in 0..5 {
+            pts.push(Point3::new(1.6 + 0.1 * k as f64, 0.3, -0.2) + off);
+            nrm.push(nalgebra::Vector3::x());
+        }
+        let cloud = Mesh::from_points(pts, Some(nrm));
+        let (m, rep) = reconstruct(&cloud, &ReconstructOptions::default(), &mut |_, _| {}).unwrap();
+        assert!(rep.closed_manifold, "{rep:?}");
+        assert_eq!(rep.euler_characteristic, 2, "{rep:?}");
+        let worst = m
+            .positions
+            .iter()
+            .map(|p| s.distance(&(p - off)).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-3 * rep.diagonal * 2.0, "{worst} {rep:?}");
+    }
+
+    #[test]
+    fn tiny_inputs_do_not_panic() {
+        let o = ReconstructOptions::default();
+        for n in [1usize, 2, 5, 12, 40] {
+            let c = Shape::Sphere(1.0).sample(n, 0.0, false);
+            if let Ok((m, r)) = reconstruct(&c, &o, &mut |_, _| {}) {
+                assert!(r.closed_manifold || m.faces.is_empty());
+            }
+            let mut c = c;
+            c.normals = None;
+            let _ = reconstruct(&c, &o, &mut |_, _| {});
+        }
+        // Non-finite normals are left out (or estimated), never a panic.
+        let mut c = Shape::Sphere(1.0).sample(500, 0.0, false);
+        if let Some(n) = c.normals.as_mut() {
+            n[3] = nalgebra::Vector3::new(f64::NAN, 0.0, 0.0);
+            n[4] = nalgebra::Vector3::zeros();
+        }
+        let (_, r) = reconstruct(&c, &o, &mut |_, _| {}).unwrap();
+        assert!(r.closed_manifold);
     }
 
     #[test]
