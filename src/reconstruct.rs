@@ -86,6 +86,8 @@ pub struct ReconstructReport {
     pub removed_components: usize,
     pub relax_failures: usize,
     pub refine: RefineReport,
+    /// The result enclosed a negative volume and was turned inside out (inverted normals).
+    pub flipped_output: bool,
     pub vertices: usize,
     pub faces: usize,
     pub closed_manifold: bool,
@@ -178,8 +180,16 @@ pub fn reconstruct(
         max_levels: opts.max_subdivisions,
         relax_iterations: 0,
     };
-    let (mesh, refine_report) = refine(mesh, &f, &ropts, &proj);
+    let (mut mesh, refine_report) = refine(mesh, &f, &ropts, &proj);
     timings.refine = t.elapsed().as_secs_f64();
+    // Global orientation check: a closed result must enclose a positive volume (it would not if
+    // the normals, and so the implicit's sign, came out inverted).
+    let flipped_output = mesh.signed_volume() < 0.0;
+    if flipped_output {
+        for tri in &mut mesh.faces {
+            tri.swap(1, 2);
+        }
+    }
 
     progress("deviation", 0.9);
     let t = Instant::now();
@@ -206,6 +216,7 @@ pub fn reconstruct(
         removed_components,
         relax_failures,
         refine: refine_report,
+        flipped_output,
         vertices: mesh.positions.len(),
         faces: mesh.faces.len(),
         closed_manifold: topo.is_closed_manifold(),
@@ -325,19 +336,39 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn sphere_clean_noisy_and_with_hole() {
+    fn sphere_clean() {
         let s = Shape::Sphere(1.0);
         check(&s, s.sample(2000, 0.0, false), 2);
+    }
+
+    #[test]
+    fn sphere_noisy() {
+        let s = Shape::Sphere(1.0);
         let rep = check(&s, s.sample(2000, 1e-3, false), 2);
         assert!(rep.deviation.unwrap().relative.mean < 2e-4);
+    }
+
+    #[test]
+    fn sphere_with_missing_patch() {
+        let s = Shape::Sphere(1.0);
         check(&s, s.sample(2000, 0.0, true), 2);
     }
 
     #[test]
-    fn torus_clean_noisy_and_with_hole() {
+    fn torus_clean() {
         let t = Shape::Torus(1.0, 0.35);
         check(&t, t.sample(4500, 0.0, false), 0);
+    }
+
+    #[test]
+    fn torus_noisy() {
+        let t = Shape::Torus(1.0, 0.35);
         check(&t, t.sample(4500, 5e-4, false), 0);
+    }
+
+    #[test]
+    fn torus_with_missing_patch() {
+        let t = Shape::Torus(1.0, 0.35);
         check(&t, t.sample(4500, 0.0, true), 0);
     }
 
@@ -348,6 +379,18 @@ pub(crate) mod tests {
         c.normals = None;
         let rep = check(&s, c, 2);
         assert_eq!(rep.normal_source, NormalSource::Estimated);
+    }
+
+    #[test]
+    fn inverted_normals_still_give_an_outward_mesh() {
+        let s = Shape::Sphere(1.0);
+        let mut c = s.sample(800, 0.0, false);
+        if let Some(n) = c.normals.as_mut() {
+            n.iter_mut().for_each(|v| *v = -*v);
+        }
+        let (m, rep) = reconstruct(&c, &ReconstructOptions::default(), &mut |_, _| {}).unwrap();
+        assert!(rep.closed_manifold);
+        assert!(m.signed_volume() > 0.0);
     }
 
     #[test]
