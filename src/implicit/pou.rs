@@ -10,14 +10,22 @@
 //!
 //! Domains (seed 003 section 3.1, seed 004 section 2.1): the root cube around the points is split
 //! while a cell's support holds more than `max_points` points or its best local function misses
-//! the tolerance. A cell's support is the cell enlarged by `overlap` (seed 003: about 10 %), grown
-//! further while it holds fewer than `min_points` points. Each local function is fitted to *all*
-//! points inside its support, so wherever the weights are non-zero every contributing function
-//! nearly vanishes at the points, and so does the blend. Empty cells next to the points (holes)
-//! get a function fitted to the points of their grown support, which bridges the hole; empty
-//! cells far from all points get a constant signed-distance estimate so that F is defined
-//! everywhere in the root cube. Outside the root cube F is the distance to the nearest point,
-//! signed by its normal.
+//! the tolerance (never below the points' estimated noise, see `noise.rs`). A cell's weight
+//! support is the cell enlarged by `overlap` (seed 003: about 10 %); its fit set is the points in
+//! that box, grown while there are fewer than `min_points`. Each local function is fitted to
+//! *all* points inside its support, so wherever the weights are non-zero every contributing
+//! function nearly vanishes at the points, and so does the blend. A domain too small to split
+//! keeps a polynomial within 1.5 times the tolerance (the misfit is noise there), else an RBF.
+//!
+//! Cells without points have one of two roles ([`CellRole`]):
+//! * a *bridge* where the surface may cross the cell (a hole): fitted to the rim points nearest
+//!   to it, with a wider support; bridges blend in with the distance from the points
+//!   (see [`PouImplicit::blend`]), so near the data only the fitted cells count;
+//! * a *fallback* beside the surface or far from it: a rough signed distance (a quadratic of the
+//!   nearest points, their tangent plane, or a constant) used only where nothing else reaches,
+//!   so that F is defined everywhere in the root cube.
+//!
+//! Outside the root cube F is the distance to the nearest point, signed by its normal.
 //!
 //! Fitting is parallel (rayon, one octree level at a time, collected in order): the result does
 //! not depend on the thread count.
