@@ -20,7 +20,7 @@
 //! Cells without points have one of two roles ([`CellRole`]):
 //! * a *bridge* where the surface may cross the cell (a hole): fitted to the rim points nearest
 //!   to it, with a wider support; bridges blend in with the distance from the points
-//!   (see [`PouImplicit::blend`]), so near the data only the fitted cells count;
+//!   (see `PouImplicit::blend`), so near the data only the fitted cells count;
 //! * a *fallback* beside the surface or far from it: a rough signed distance (a quadratic of the
 //!   nearest points, their tangent plane, or a constant) used only where nothing else reaches,
 //!   so that F is defined everywhere in the root cube.
@@ -147,7 +147,7 @@ pub struct Cell {
     pub center: Point3<f64>,
     pub half: Vector3<f64>,
     pub function: LocalFunction,
-    /// Fitted, bridge or fallback (see [`PouImplicit::blend`] for how they combine).
+    /// Fitted, bridge or fallback (see `PouImplicit::blend` for how they combine).
     pub role: CellRole,
     pub support_points: u32,
     pub max_residual: f64,

@@ -73,7 +73,7 @@ pub fn gap_quantile(gaps: &[f64], q: f64) -> (f64, f64) {
     (v, gaps.iter().copied().fold(0.0, f64::max))
 }
 
-/// Subdivides and projects until [`surface_gap`] is within the tolerance or `max_levels` is
+/// Subdivides and projects until the gap quantile ([`surface_gaps`]) is within the tolerance or `max_levels` is
 /// reached.
 pub fn refine<F: Implicit + ?Sized>(
     mut mesh: Mesh,
