@@ -36,6 +36,8 @@ pub struct ReconstructOptions {
     pub tolerance: Option<f64>,
     /// At most this many 1-to-4 subdivisions (default 2).
     pub max_subdivisions: usize,
+    /// No subdivision beyond this many triangles (default 4,000,000).
+    pub max_faces: usize,
     /// Neighbours for normal estimation and repair (default 12).
     pub normal_neighbours: usize,
     /// Measure the deviation of the input points from the result (default true).
@@ -51,6 +53,7 @@ impl Default for ReconstructOptions {
             relax_iterations: 2,
             tolerance: None,
             max_subdivisions: 2,
+            max_faces: 4_000_000,
             normal_neighbours: crate::normals::DEFAULT_NEIGHBOURS,
             measure_deviation: true,
         }
@@ -72,7 +75,10 @@ pub struct Timings {
 /// What [`reconstruct`] did and how good the result is.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct ReconstructReport {
+    /// Distinct input points (exact duplicates merged).
     pub input_points: usize,
+    /// Points added on the triangles of a coarse input mesh.
+    pub sample_points: usize,
     pub normal_source: NormalSource,
     pub normals_flipped: usize,
     pub normals_estimated: usize,
@@ -144,9 +150,11 @@ pub fn reconstruct(
 
     progress("polygonize", 0.4);
     let t = Instant::now();
+    // Never finer than 1/2000 of the diagonal: clustered points (a coarse mesh with a few dense
+    // spots) would otherwise set a grid fine everywhere.
     let cell = match opts.cell_size {
         Some(c) => c,
-        None => opts.resolution * spacing.max(1e-6 * diag),
+        None => opts.resolution * spacing.max(diag / 2000.0),
     };
     let root = f.domain();
     let dom = crate::mesh::Aabb {
@@ -161,8 +169,9 @@ pub fn reconstruct(
     }
     // Spurious sheets beside the surface are the nearest surface for no input point.
     // A part with fewer points than half a fit needs is not reconstructible: noise or outliers.
-    let min_votes = (opts.fit.min_points / 2).max(op.points.len() / 5_000);
-    let (mut mesh, removed_components) = keep_supported_components(mesh, &op.points, min_votes)?;
+    let min_votes = (opts.fit.min_points / 2).max(op.original / 5_000);
+    let (mut mesh, removed_components) =
+        keep_supported_components(mesh, &op.points[..op.original], min_votes)?;
     timings.polygonize = t.elapsed().as_secs_f64();
     let (mc_v, mc_f) = (mesh.positions.len(), mesh.faces.len());
 
@@ -179,6 +188,7 @@ pub fn reconstruct(
         quantile: 0.99,
         max_levels: opts.max_subdivisions,
         relax_iterations: 0,
+        max_faces: opts.max_faces,
     };
     let (mut mesh, refine_report) = refine(mesh, &f, &ropts, &proj);
     timings.refine = t.elapsed().as_secs_f64();
@@ -194,7 +204,7 @@ pub fn reconstruct(
     progress("deviation", 0.9);
     let t = Instant::now();
     let dev = if opts.measure_deviation {
-        Some(deviation(&op.points, &mesh, diag)?)
+        Some(deviation(&op.points[..op.original], &mesh, diag)?)
     } else {
         None
     };
@@ -203,7 +213,8 @@ pub fn reconstruct(
     timings.total = t_all.elapsed().as_secs_f64();
     progress("done", 1.0);
     let report = ReconstructReport {
-        input_points: op.points.len(),
+        input_points: op.original,
+        sample_points: op.points.len() - op.original,
         normal_source: op.source,
         normals_flipped: op.flipped,
         normals_estimated: op.estimated,

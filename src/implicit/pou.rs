@@ -247,6 +247,26 @@ impl PouImplicit {
         if diagonal.is_nan() || diagonal <= 0.0 {
             return Err(Error::Degenerate("all points coincide".into()));
         }
+        // Points on one plane (or line) enclose no volume: no closed surface to find.
+        {
+            let mut mean = Vector3::zeros();
+            for p in &pts {
+                mean += p.coords;
+            }
+            mean /= pts.len() as f64;
+            let mut cov = nalgebra::Matrix3::zeros();
+            for p in &pts {
+                let d = p.coords - mean;
+                cov += d * d.transpose();
+            }
+            let ev = nalgebra::SymmetricEigen::new(cov / pts.len() as f64).eigenvalues;
+            let thinnest = ev.min().max(0.0).sqrt();
+            if thinnest <= 1e-6 * diagonal {
+                return Err(Error::Degenerate(
+                    "the points lie on a plane: they enclose no volume".into(),
+                ));
+            }
+        }
         let kd = KdTree::build(&pts)?;
         let root = Cube::around(&bbox, 0.1);
         // The tolerance is never below the points' own scatter (see `noise`): asking more only

@@ -6,6 +6,7 @@
 
 pub mod normals;
 pub mod retain;
+pub mod sample;
 pub mod subdivide;
 pub mod topology;
 
