@@ -127,7 +127,7 @@ fn extreme_check(
 /// or non-finite coordinates.
 pub fn oriented_points(input: &Mesh, k: usize) -> Result<OrientedPoints> {
     let k = k.max(4);
-    let (points, given, source, mut normals) = if input.faces.is_empty() {
+    let (points, given, source, normals) = if input.faces.is_empty() {
         let src = if input.normals.is_some() {
             NormalSource::Given
         } else {
@@ -288,8 +288,13 @@ mod tests {
             let m = octahedron(inward);
             let o = oriented_points(&m, 4).unwrap();
             assert_eq!(o.source, NormalSource::Faces);
-            for (p, n) in o.points.iter().zip(&o.normals) {
+            assert_eq!(o.original, 6);
+            for (p, n) in o.points.iter().zip(&o.normals).take(o.original) {
                 assert!(p.coords.dot(n) > 0.9, "{inward}");
+            }
+            // Samples on the faces point outwards too.
+            for (p, n) in o.points.iter().zip(&o.normals) {
+                assert!(p.coords.dot(n) > 0.0, "{inward}");
             }
         }
     }
