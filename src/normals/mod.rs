@@ -300,6 +300,22 @@ mod tests {
     }
 
     #[test]
+    fn duplicates_are_merged() {
+        let p = vec![
+            Point3::new(0.0, 0.0, 1.0),
+            Point3::new(0.0, 0.0, 1.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+            Point3::new(-0.0, 0.0, 1.0),
+        ];
+        let n = vec![Vector3::z(); 5];
+        let o = oriented_points(&Mesh::from_points(p, Some(n)), 4).unwrap();
+        assert_eq!(o.original, 3);
+        assert_eq!(o.points.len(), 3);
+        assert!((o.normals[0] - Vector3::z()).norm() < 1e-12);
+    }
+
+    #[test]
     fn empty_and_nan_inputs_are_errors() {
         assert!(oriented_points(&Mesh::default(), 8).is_err());
         let m = Mesh::from_points(vec![Point3::new(f64::NAN, 0.0, 0.0)], None);
