@@ -36,6 +36,8 @@ pub struct ReconstructOptions {
     pub tolerance: Option<f64>,
     /// At most this many 1-to-4 subdivisions (default 2).
     pub max_subdivisions: usize,
+    /// No subdivision beyond this many triangles (default 4,000,000).
+    pub max_faces: usize,
     /// Neighbours for normal estimation and repair (default 12).
     pub normal_neighbours: usize,
     /// Measure the deviation of the input points from the result (default true).
@@ -51,6 +53,7 @@ impl Default for ReconstructOptions {
             relax_iterations: 2,
             tolerance: None,
             max_subdivisions: 2,
+            max_faces: 4_000_000,
             normal_neighbours: crate::normals::DEFAULT_NEIGHBOURS,
             measure_deviation: true,
         }
@@ -72,7 +75,10 @@ pub struct Timings {
 /// What [`reconstruct`] did and how good the result is.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct ReconstructReport {
+    /// Distinct input points (exact duplicates merged).
     pub input_points: usize,
+    /// Points added on the triangles of a coarse input mesh.
+    pub sample_points: usize,
     pub normal_source: NormalSource,
     pub normals_flipped: usize,
     pub normals_estimated: usize,
@@ -86,6 +92,8 @@ pub struct ReconstructReport {
     pub removed_components: usize,
     pub relax_failures: usize,
     pub refine: RefineReport,
+    /// The result enclosed a negative volume and was turned inside out (inverted normals).
+    pub flipped_output: bool,
     pub vertices: usize,
     pub faces: usize,
     pub closed_manifold: bool,
@@ -142,9 +150,11 @@ pub fn reconstruct(
 
     progress("polygonize", 0.4);
     let t = Instant::now();
+    // Never finer than 1/2000 of the diagonal: clustered points (a coarse mesh with a few dense
+    // spots) would otherwise set a grid fine everywhere.
     let cell = match opts.cell_size {
         Some(c) => c,
-        None => opts.resolution * spacing.max(1e-6 * diag),
+        None => opts.resolution * spacing.max(diag / 2000.0),
     };
     let root = f.domain();
     let dom = crate::mesh::Aabb {
@@ -158,8 +168,10 @@ pub fn reconstruct(
         ));
     }
     // Spurious sheets beside the surface are the nearest surface for no input point.
-    let min_votes = 3usize.max(op.points.len() / 10_000);
-    let (mut mesh, removed_components) = keep_supported_components(mesh, &op.points, min_votes)?;
+    // A part with fewer points than half a fit needs is not reconstructible: noise or outliers.
+    let min_votes = (opts.fit.min_points / 2).max(op.original / 5_000);
+    let (mut mesh, removed_components) =
+        keep_supported_components(mesh, &op.points[..op.original], min_votes)?;
     timings.polygonize = t.elapsed().as_secs_f64();
     let (mc_v, mc_f) = (mesh.positions.len(), mesh.faces.len());
 
@@ -176,14 +188,23 @@ pub fn reconstruct(
         quantile: 0.99,
         max_levels: opts.max_subdivisions,
         relax_iterations: 0,
+        max_faces: opts.max_faces,
     };
-    let (mesh, refine_report) = refine(mesh, &f, &ropts, &proj);
+    let (mut mesh, refine_report) = refine(mesh, &f, &ropts, &proj);
     timings.refine = t.elapsed().as_secs_f64();
+    // Global orientation check: a closed result must enclose a positive volume (it would not if
+    // the normals, and so the implicit's sign, came out inverted).
+    let flipped_output = mesh.signed_volume() < 0.0;
+    if flipped_output {
+        for tri in &mut mesh.faces {
+            tri.swap(1, 2);
+        }
+    }
 
     progress("deviation", 0.9);
     let t = Instant::now();
     let dev = if opts.measure_deviation {
-        Some(deviation(&op.points, &mesh, diag)?)
+        Some(deviation(&op.points[..op.original], &mesh, diag)?)
     } else {
         None
     };
@@ -192,7 +213,8 @@ pub fn reconstruct(
     timings.total = t_all.elapsed().as_secs_f64();
     progress("done", 1.0);
     let report = ReconstructReport {
-        input_points: op.points.len(),
+        input_points: op.original,
+        sample_points: op.points.len() - op.original,
         normal_source: op.source,
         normals_flipped: op.flipped,
         normals_estimated: op.estimated,
@@ -205,6 +227,7 @@ pub fn reconstruct(
         removed_components,
         relax_failures,
         refine: refine_report,
+        flipped_output,
         vertices: mesh.positions.len(),
         faces: mesh.faces.len(),
         closed_manifold: topo.is_closed_manifold(),
@@ -324,35 +347,67 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn sphere_clean_noisy_and_with_hole() {
+    fn sphere_clean() {
         let s = Shape::Sphere(1.0);
-        check(&s, s.sample(3000, 0.0, false), 2);
-        let rep = check(&s, s.sample(3000, 1e-3, false), 2);
-        assert!(rep.deviation.unwrap().relative.mean < 2e-4);
-        check(&s, s.sample(3000, 0.0, true), 2);
+        check(&s, s.sample(2000, 0.0, false), 2);
     }
 
     #[test]
-    fn torus_clean_noisy_and_with_hole() {
+    fn sphere_noisy() {
+        let s = Shape::Sphere(1.0);
+        let rep = check(&s, s.sample(2000, 1e-3, false), 2);
+        assert!(rep.deviation.unwrap().relative.mean < 2e-4);
+    }
+
+    #[test]
+    fn sphere_with_missing_patch() {
+        let s = Shape::Sphere(1.0);
+        check(&s, s.sample(2000, 0.0, true), 2);
+    }
+
+    #[test]
+    fn torus_clean() {
         let t = Shape::Torus(1.0, 0.35);
-        check(&t, t.sample(6000, 0.0, false), 0);
-        check(&t, t.sample(6000, 1e-3, false), 0);
-        check(&t, t.sample(6000, 0.0, true), 0);
+        check(&t, t.sample(4500, 0.0, false), 0);
+    }
+
+    #[test]
+    fn torus_noisy() {
+        let t = Shape::Torus(1.0, 0.35);
+        check(&t, t.sample(4500, 5e-4, false), 0);
+    }
+
+    #[test]
+    fn torus_with_missing_patch() {
+        let t = Shape::Torus(1.0, 0.35);
+        check(&t, t.sample(4500, 0.0, true), 0);
     }
 
     #[test]
     fn sphere_without_normals() {
         let s = Shape::Sphere(1.0);
-        let mut c = s.sample(3000, 0.0, false);
+        let mut c = s.sample(2000, 0.0, false);
         c.normals = None;
         let rep = check(&s, c, 2);
         assert_eq!(rep.normal_source, NormalSource::Estimated);
     }
 
     #[test]
+    fn inverted_normals_still_give_an_outward_mesh() {
+        let s = Shape::Sphere(1.0);
+        let mut c = s.sample(800, 0.0, false);
+        if let Some(n) = c.normals.as_mut() {
+            n.iter_mut().for_each(|v| *v = -*v);
+        }
+        let (m, rep) = reconstruct(&c, &ReconstructOptions::default(), &mut |_, _| {}).unwrap();
+        assert!(rep.closed_manifold);
+        assert!(m.signed_volume() > 0.0);
+    }
+
+    #[test]
     fn result_does_not_depend_on_thread_count() {
-        let t = Shape::Torus(1.0, 0.35);
-        let mut c = t.sample(3000, 1e-3, true);
+        let t = Shape::Sphere(1.0);
+        let mut c = t.sample(800, 0.0, true);
         c.normals = None;
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
@@ -367,6 +422,59 @@ pub(crate) mod tests {
         let b = run(3);
         assert_eq!(a.faces, b.faces);
         assert_eq!(a.positions, b.positions);
+    }
+
+    #[test]
+    fn duplicates_outliers_and_far_offsets() {
+        let s = Shape::Sphere(1.0);
+        let base = s.sample(1000, 0.0, false);
+        // Every point three times, plus a few outliers, all far from the origin.
+        let off = nalgebra::Vector3::new(1e5, -2e5, 3e5);
+        let mut pts = Vec::new();
+        let mut nrm = Vec::new();
+        let bn = base.normals.clone().unwrap();
+        for (p, n) in base.positions.iter().zip(&bn) {
+            for _ in 0..3 {
+                pts.push(p + off);
+                nrm.push(*n);
+            }
+        }
+        for k in 0..5 {
+            pts.push(Point3::new(1.6 + 0.1 * k as f64, 0.3, -0.2) + off);
+            nrm.push(nalgebra::Vector3::x());
+        }
+        let cloud = Mesh::from_points(pts, Some(nrm));
+        let (m, rep) = reconstruct(&cloud, &ReconstructOptions::default(), &mut |_, _| {}).unwrap();
+        assert!(rep.closed_manifold, "{rep:?}");
+        assert_eq!(rep.euler_characteristic, 2, "{rep:?}");
+        let worst = m
+            .positions
+            .iter()
+            .map(|p| s.distance(&(p - off)).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-3 * rep.diagonal * 2.0, "{worst} {rep:?}");
+    }
+
+    #[test]
+    fn tiny_inputs_do_not_panic() {
+        let o = ReconstructOptions::default();
+        for n in [1usize, 2, 5, 12, 40] {
+            let c = Shape::Sphere(1.0).sample(n, 0.0, false);
+            if let Ok((m, r)) = reconstruct(&c, &o, &mut |_, _| {}) {
+                assert!(r.closed_manifold || m.faces.is_empty());
+            }
+            let mut c = c;
+            c.normals = None;
+            let _ = reconstruct(&c, &o, &mut |_, _| {});
+        }
+        // Non-finite normals are left out (or estimated), never a panic.
+        let mut c = Shape::Sphere(1.0).sample(500, 0.0, false);
+        if let Some(n) = c.normals.as_mut() {
+            n[3] = nalgebra::Vector3::new(f64::NAN, 0.0, 0.0);
+            n[4] = nalgebra::Vector3::zeros();
+        }
+        let (_, r) = reconstruct(&c, &o, &mut |_, _| {}).unwrap();
+        assert!(r.closed_manifold);
     }
 
     #[test]

@@ -10,14 +10,22 @@
 //!
 //! Domains (seed 003 section 3.1, seed 004 section 2.1): the root cube around the points is split
 //! while a cell's support holds more than `max_points` points or its best local function misses
-//! the tolerance. A cell's support is the cell enlarged by `overlap` (seed 003: about 10 %), grown
-//! further while it holds fewer than `min_points` points. Each local function is fitted to *all*
-//! points inside its support, so wherever the weights are non-zero every contributing function
-//! nearly vanishes at the points, and so does the blend. Empty cells next to the points (holes)
-//! get a function fitted to the points of their grown support, which bridges the hole; empty
-//! cells far from all points get a constant signed-distance estimate so that F is defined
-//! everywhere in the root cube. Outside the root cube F is the distance to the nearest point,
-//! signed by its normal.
+//! the tolerance (never below the points' estimated noise, see `noise.rs`). A cell's weight
+//! support is the cell enlarged by `overlap` (seed 003: about 10 %); its fit set is the points in
+//! that box, grown while there are fewer than `min_points`. Each local function is fitted to
+//! *all* points inside its support, so wherever the weights are non-zero every contributing
+//! function nearly vanishes at the points, and so does the blend. A domain too small to split
+//! keeps a polynomial within 1.5 times the tolerance (the misfit is noise there), else an RBF.
+//!
+//! Cells without points have one of two roles ([`CellRole`]):
+//! * a *bridge* where the surface may cross the cell (a hole): fitted to the rim points nearest
+//!   to it, with a wider support; bridges blend in with the distance from the points
+//!   (see `PouImplicit::blend`), so near the data only the fitted cells count;
+//! * a *fallback* beside the surface or far from it: a rough signed distance (a quadratic of the
+//!   nearest points, their tangent plane, or a constant) used only where nothing else reaches,
+//!   so that F is defined everywhere in the root cube.
+//!
+//! Outside the root cube F is the distance to the nearest point, signed by its normal.
 //!
 //! Fitting is parallel (rayon, one octree level at a time, collected in order): the result does
 //! not depend on the thread count.
@@ -121,15 +129,26 @@ pub struct FitStats {
     pub diagonal: f64,
 }
 
+/// What a domain's function is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum CellRole {
+    /// Fitted to the points in its support (seed 003/004 local functions).
+    Fitted,
+    /// Bridges a hole: fitted to the rim points around an empty cell the surface crosses.
+    Bridge,
+    /// Empty space beside the surface or far from it: a rough signed distance that only counts
+    /// where nothing else reaches.
+    Fallback,
+}
+
 /// One domain: its support box and function.
 #[derive(Debug, Clone)]
 pub struct Cell {
     pub center: Point3<f64>,
     pub half: Vector3<f64>,
     pub function: LocalFunction,
-    /// True for cells without points in their support (holes, empty space): they only
-    /// extrapolate and are blended in away from the points (see [`PouImplicit::blend`]).
-    pub extrapolating: bool,
+    /// Fitted, bridge or fallback (see `PouImplicit::blend` for how they combine).
+    pub role: CellRole,
     pub support_points: u32,
     pub max_residual: f64,
     pub meets_tolerance: bool,
@@ -147,6 +166,9 @@ pub struct PouImplicit {
     blend_radius: f64,
     stats: FitStats,
 }
+
+/// Largest edge of a bridge cell, in point spacings.
+const MAX_BRIDGE_CELL: f64 = 8.0;
 
 /// Support of an extrapolating cell relative to a fitted cell's.
 const EXTRAPOLATION_SPREAD: f64 = 1.5;
@@ -225,18 +247,40 @@ impl PouImplicit {
         if diagonal.is_nan() || diagonal <= 0.0 {
             return Err(Error::Degenerate("all points coincide".into()));
         }
+        // Points on one plane (or line) enclose no volume: no closed surface to find.
+        {
+            let mut mean = Vector3::zeros();
+            for p in &pts {
+                mean += p.coords;
+            }
+            mean /= pts.len() as f64;
+            let mut cov = nalgebra::Matrix3::zeros();
+            for p in &pts {
+                let d = p.coords - mean;
+                cov += d * d.transpose();
+            }
+            let ev = nalgebra::SymmetricEigen::new(cov / pts.len() as f64).eigenvalues;
+            let thinnest = ev.min().max(0.0).sqrt();
+            if thinnest <= 1e-6 * diagonal {
+                return Err(Error::Degenerate(
+                    "the points lie on a plane: they enclose no volume".into(),
+                ));
+            }
+        }
         let kd = KdTree::build(&pts)?;
         let root = Cube::around(&bbox, 0.1);
         // The tolerance is never below the points' own scatter (see `noise`): asking more only
         // splits domains until they interpolate the noise.
         let noise = super::noise::estimate_noise(&pts, &nrm, &kd, opts.min_points, 2000);
         let tol = (opts.tolerance * diagonal).max(noise);
+        let spacing = sample_spacing(&pts, &kd).max(1e-9 * diagonal);
         let builder = Builder {
             pts: &pts,
             nrm: &nrm,
             kd: &kd,
             opts,
             tol,
+            spacing,
             root_half: 0.5 * root.size,
         };
         let tree = Octree::build(root, &pts, opts.max_depth, |c| builder.decide(c));
@@ -257,7 +301,7 @@ impl PouImplicit {
                 LocalKind::Rbf => stats.rbf += 1,
                 LocalKind::Constant => stats.constant += 1,
             }
-            if cell.extrapolating {
+            if cell.role != CellRole::Fitted {
                 stats.extrapolating += 1;
                 if cell.function.kind() == LocalKind::Rbf {
                     stats.extrapolating_rbf += 1;
@@ -272,7 +316,7 @@ impl PouImplicit {
             support_sum += cell.support_points as usize;
         }
         stats.mean_support_points = support_sum as f64 / stats.cells.max(1) as f64;
-        let blend_radius = 2.0 * sample_spacing(&pts, &kd).max(1e-9 * diagonal);
+        let blend_radius = 2.0 * spacing;
         Ok(PouImplicit {
             tree,
             points: pts,
@@ -354,10 +398,10 @@ impl PouImplicit {
     ///
     /// Fitted cells and extrapolating cells (holes, empty space) are summed apart and combined
     /// as `F = (A_fit + p A_ext) / (S_fit + p S_ext)` (A: sum of W f, S: sum of W), where the
-    /// priority `p = clamp((delta - s) / 2s, 0, 1)^2` grows with the distance `delta` to the
-    /// nearest point (`s`: the point spacing). Within a spacing of the points the fitted cells
-    /// decide alone; inside a hole the bridge takes over smoothly instead of at the edge of the
-    /// fitted cells' supports.
+    /// priority `p = clamp((delta - s) / s, 0, 1)^2` grows with the distance `delta` to the
+    /// nearest point (`s`: the point spacing). Within a spacing of the points (where the sampled
+    /// surface lies) the fitted cells decide alone; inside a hole the bridges take over
+    /// smoothly instead of at the edge of the fitted cells' supports.
     #[inline]
     fn blend(&self, x: &Point3<f64>, with_gradient: bool) -> (f64, Vector3<f64>) {
         #[derive(Default)]
@@ -368,7 +412,7 @@ impl PouImplicit {
             g_dwf: Vector3<f64>,
             g_dw: Vector3<f64>,
         }
-        let mut acc = [Acc::default(), Acc::default()];
+        let mut acc = [Acc::default(), Acc::default(), Acc::default()];
         let cells = self.tree.payloads();
         self.tree.for_each_support(x, |l| {
             let c = &cells[l];
@@ -383,7 +427,7 @@ impl PouImplicit {
             if w <= 0.0 {
                 return;
             }
-            let a = &mut acc[c.extrapolating as usize];
+            let a = &mut acc[c.role as usize];
             if with_gradient {
                 let (f, gf) = c.function.value_and_gradient(x);
                 // d d / d x_r = 2 t_r / a_r * prod_{s != r} q_s
@@ -404,13 +448,29 @@ impl PouImplicit {
                 a.a += w * f;
             }
         });
-        let [fit, ext] = &acc;
+        let [fit, ext, fallback] = &acc;
+        // Fallback cells count only where no fitted or bridge cell reaches.
+        if fit.s <= 0.0 && ext.s <= 0.0 {
+            if fallback.s.is_nan() || fallback.s <= 0.0 {
+                return self.fallback(x);
+            }
+            let f = fallback.a / fallback.s;
+            let g = if with_gradient {
+                (fallback.g_wf + fallback.g_dwf - fallback.g_dw * f) / fallback.s
+            } else {
+                Vector3::zeros()
+            };
+            return (f, g);
+        }
         // Priority of the extrapolating cells and its gradient.
-        let (p, gp) = if ext.s <= 0.0 || fit.s <= 0.0 {
+        let (p, gp) = if ext.s <= 0.0 {
+            (0.0, Vector3::zeros())
+        } else if fit.s <= 0.0 {
             (1.0, Vector3::zeros())
         } else {
             let (i, delta) = self.kd.nearest(x);
-            // Ramp from one spacing (half the blend radius) to three.
+            // Ramp from one spacing (half the blend radius) to three: a steeper one lets bridges
+            // decide the sign of marching-cubes corners near the surface in concave parts.
             let r0 = 0.5 * self.blend_radius;
             let r = self.blend_radius;
             if delta >= r0 + r {
@@ -461,6 +521,8 @@ struct Builder<'a> {
     kd: &'a KdTree,
     opts: &'a FitOptions,
     tol: f64,
+    /// Typical point spacing.
+    spacing: f64,
     root_half: f64,
 }
 
@@ -476,7 +538,7 @@ impl Builder<'_> {
     }
 
     fn leaf(&self, c: Point3<f64>, h: f64, n: usize, fit: LocalFit) -> Decision<Cell> {
-        self.leaf_with(c, h, n, fit, false)
+        self.leaf_with(c, h, n, fit, CellRole::Fitted)
     }
 
     fn leaf_with(
@@ -485,12 +547,12 @@ impl Builder<'_> {
         h: f64,
         n: usize,
         fit: LocalFit,
-        extrapolating: bool,
+        role: CellRole,
     ) -> Decision<Cell> {
         let meets = fit.meets(self.tol);
         // Extrapolating cells overlap their neighbours more, so that bridges of a hole made by
         // different cells blend smoothly.
-        let h = if extrapolating {
+        let h = if role == CellRole::Bridge {
             h * EXTRAPOLATION_SPREAD
         } else {
             h
@@ -500,7 +562,7 @@ impl Builder<'_> {
                 center: c,
                 half: Vector3::repeat(h),
                 function: fit.function,
-                extrapolating,
+                role,
                 support_points: n as u32,
                 max_residual: fit.max_residual,
                 meets_tolerance: meets,
@@ -575,7 +637,7 @@ impl Builder<'_> {
                 )
             }
         };
-        Some(self.leaf_with(*c, h0, p.len(), fit, true))
+        Some(self.leaf_with(*c, h0, p.len(), fit, CellRole::Fallback))
     }
 
     /// A thin-plate RBF through the points (an evenly strided subset of at most
@@ -646,7 +708,7 @@ impl Builder<'_> {
                 rms_residual: 0.0,
                 normal_agreement: 1.0,
             },
-            true,
+            CellRole::Fallback,
         )
     }
 
@@ -680,6 +742,12 @@ impl Builder<'_> {
         if empty {
             if let Some(side) = self.side_cell(&c, h0) {
                 return side;
+            }
+            // A large empty cell near the surface is split until bridges are fitted at the scale
+            // of the point sets they use (a bridge extrapolated over a box much larger than its
+            // data makes spurious sheets).
+            if ctx.can_split && ctx.cube.size > MAX_BRIDGE_CELL * self.spacing {
+                return Decision::Split;
             }
         }
         if empty {
@@ -734,7 +802,7 @@ impl Builder<'_> {
                 let fit = local::fit_poly(&p, &n, frame, degree);
                 if let Some(f) = fit.as_ref().filter(|f| f.meets(tol)) {
                     if empty {
-                        return self.leaf_with(c, h0, p.len(), f.clone(), true);
+                        return self.leaf_with(c, h0, p.len(), f.clone(), CellRole::Bridge);
                     }
                     if ctx.can_split && self.has_gap(&ctx.cube, &f.function) {
                         // The points cover only part of the cell: extrapolating over the rest
@@ -762,7 +830,7 @@ impl Builder<'_> {
             // Any sensible bridge beats a constant, whose jumps to its neighbours are walls.
             return match best {
                 Some(f) if f.max_residual <= tol.max(0.25 * h) && f.normal_agreement >= 0.9 => {
-                    self.leaf_with(c, h0, p.len(), f, true)
+                    self.leaf_with(c, h0, p.len(), f, CellRole::Bridge)
                 }
                 _ => self.constant(c, h0, 0),
             };

@@ -7,6 +7,7 @@
 pub mod adjacency;
 pub mod normals;
 pub mod retain;
+pub mod sample;
 pub mod subdivide;
 pub mod subsample;
 pub mod topology;

@@ -12,6 +12,11 @@ use crate::spatial::KdTree;
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 
+/// A mesh is sampled on its triangles at this fraction of the bounding-box diagonal where its
+/// edges are longer (a scan like the Stanford bunny, edges about 1/170 of the diagonal, gets
+/// almost nothing; a coarse model gets enough points to follow its facets).
+pub const MESH_SAMPLING: f64 = 100.0;
+
 /// Neighbours used for normal estimation and flip repair unless told otherwise.
 pub const DEFAULT_NEIGHBOURS: usize = 12;
 
@@ -29,14 +34,62 @@ pub enum NormalSource {
 /// The points of an input with unit outward normals.
 #[derive(Debug, Clone)]
 pub struct OrientedPoints {
+    /// The input's distinct points first (`..original`), then samples on a coarse mesh's
+    /// triangles.
     pub points: Vec<Point3<f64>>,
     pub normals: Vec<Vector3<f64>>,
+    /// How many of `points` are input points (exact duplicates merged).
+    pub original: usize,
     pub source: NormalSource,
     /// Normals flipped to agree with their neighbours (or all of them, when the whole input was
     /// oriented inwards).
     pub flipped: usize,
     /// Normals that had to be estimated because the input gave none usable for that point.
     pub estimated: usize,
+}
+
+/// Merges exactly coinciding points (first occurrence kept, in order), summing their given
+/// normals and face normals.
+#[allow(clippy::type_complexity)]
+fn merge_duplicates(
+    points: Vec<Point3<f64>>,
+    given: Option<Vec<Vector3<f64>>>,
+    normals: Vec<Vector3<f64>>,
+) -> (
+    Vec<Point3<f64>>,
+    Option<Vec<Vector3<f64>>>,
+    Vec<Vector3<f64>>,
+) {
+    let mut first: crate::spatial::fast_hash::IntMap<[u64; 3], usize> = Default::default();
+    let mut map = Vec::with_capacity(points.len());
+    let mut out = Vec::with_capacity(points.len());
+    for p in &points {
+        // +0.0 and -0.0 are the same point.
+        let key = [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f64::to_bits);
+        let next = out.len();
+        let i = *first.entry(key).or_insert(next);
+        if i == next {
+            out.push(*p);
+        }
+        map.push(i);
+    }
+    if out.len() == points.len() {
+        return (points, given, normals);
+    }
+    let sum = |v: &[Vector3<f64>]| {
+        let mut acc = vec![Vector3::zeros(); out.len()];
+        for (n, &i) in v.iter().zip(&map) {
+            acc[i] += n;
+        }
+        acc
+    };
+    let given = given.map(|g| sum(&g));
+    let normals = if normals.is_empty() {
+        normals
+    } else {
+        sum(&normals)
+    };
+    (out, given, normals)
 }
 
 /// Index of the extreme point (largest or smallest x, y or z) whose normal is best aligned with
@@ -74,7 +127,7 @@ fn extreme_check(
 /// or non-finite coordinates.
 pub fn oriented_points(input: &Mesh, k: usize) -> Result<OrientedPoints> {
     let k = k.max(4);
-    let (points, given, source, mut normals) = if input.faces.is_empty() {
+    let (points, given, source, normals) = if input.faces.is_empty() {
         let src = if input.normals.is_some() {
             NormalSource::Given
         } else {
@@ -108,6 +161,31 @@ pub fn oriented_points(input: &Mesh, k: usize) -> Result<OrientedPoints> {
     {
         return Err(Error::Degenerate("non-finite point coordinate".into()));
     }
+    if let Some(g) = &given {
+        if g.len() != points.len() {
+            return Err(Error::Degenerate(format!(
+                "{} points but {} normals",
+                points.len(),
+                g.len()
+            )));
+        }
+    }
+    // Exact duplicates (seams of a mesh, repeated scan points) carry no information and make
+    // spacing estimates and interpolation degenerate: merged, their normals summed.
+    let (mut points, mut given, mut normals) = merge_duplicates(points, given, normals);
+    let original = points.len();
+    // A coarse mesh is sampled on its edges and faces, so that the surface follows the
+    // triangles rather than only their corners.
+    if source == NormalSource::Faces {
+        if let Some(b) = crate::mesh::Aabb::of(&points) {
+            let (sp, sn) = crate::mesh::sample::sample_surface(input, b.diagonal() / MESH_SAMPLING);
+            points.extend(sp);
+            normals.extend(sn);
+        }
+    }
+    if let Some(g) = given.as_mut() {
+        g.truncate(points.len());
+    }
     let kd = KdTree::build(&points)?;
     let mut flipped = 0;
     let mut estimated = 0;
@@ -118,14 +196,7 @@ pub fn oriented_points(input: &Mesh, k: usize) -> Result<OrientedPoints> {
             estimated = points.len();
         }
         NormalSource::Given | NormalSource::Faces => {
-            if let Some(g) = given {
-                if g.len() != points.len() {
-                    return Err(Error::Degenerate(format!(
-                        "{} points but {} normals",
-                        points.len(),
-                        g.len()
-                    )));
-                }
+            if let Some(g) = given.take() {
                 normals = g;
             }
             for n in normals.iter_mut() {
@@ -169,6 +240,7 @@ pub fn oriented_points(input: &Mesh, k: usize) -> Result<OrientedPoints> {
     Ok(OrientedPoints {
         points,
         normals,
+        original,
         source,
         flipped,
         estimated,
@@ -216,10 +288,31 @@ mod tests {
             let m = octahedron(inward);
             let o = oriented_points(&m, 4).unwrap();
             assert_eq!(o.source, NormalSource::Faces);
-            for (p, n) in o.points.iter().zip(&o.normals) {
+            assert_eq!(o.original, 6);
+            for (p, n) in o.points.iter().zip(&o.normals).take(o.original) {
                 assert!(p.coords.dot(n) > 0.9, "{inward}");
             }
+            // Samples on the faces point outwards too.
+            for (p, n) in o.points.iter().zip(&o.normals) {
+                assert!(p.coords.dot(n) > 0.0, "{inward}");
+            }
         }
+    }
+
+    #[test]
+    fn duplicates_are_merged() {
+        let p = vec![
+            Point3::new(0.0, 0.0, 1.0),
+            Point3::new(0.0, 0.0, 1.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+            Point3::new(-0.0, 0.0, 1.0),
+        ];
+        let n = vec![Vector3::z(); 5];
+        let o = oriented_points(&Mesh::from_points(p, Some(n)), 4).unwrap();
+        assert_eq!(o.original, 3);
+        assert_eq!(o.points.len(), 3);
+        assert!((o.normals[0] - Vector3::z()).norm() < 1e-12);
     }
 
     #[test]

@@ -13,9 +13,11 @@
 //! bilinear interpolant at its saddle point), which depends only on the face's four values, so
 //! both cubes sharing the face choose alike and the surface has no cracks. Segments are oriented
 //! with the negative (inside) side consistently on one hand; in each cube they chain into closed
-//! loops, each fanned into triangles. Every surface edge on a cube face is then shared by exactly
-//! the two triangles of the two cubes beside it, and the mesh is a closed 2-manifold whenever no
-//! corner sits outside the grid (corners outside the domain count as outside, f > 0).
+//! loops, each fanned into triangles (or, where a fan diagonal could join two vertices of one cube
+//! face and so repeat an edge of the neighbouring cube, starred around a new centre vertex).
+//! Every surface edge on a cube face is then shared by exactly the two triangles of the two cubes
+//! beside it, and the mesh is a closed 2-manifold (corners outside the domain count as outside,
+//! f > 0, which closes the surface there).
 //! Vertices sit on grid edges (shared through a hash map) at the linear interpolation of the
 //! corner values. Convention: f < 0 inside; triangles are counter-clockwise seen from outside.
 
@@ -218,6 +220,35 @@ fn cube_loops(v: &[f64; 8], faces: &[(usize, usize, [usize; 4]); 6]) -> Loops {
     out
 }
 
+/// The two cube faces (axis * 2 + side) holding cube edge `e` (lower corner bits * 3 + axis).
+#[inline]
+fn edge_faces(e: u8) -> [u8; 2] {
+    let (lo, axis) = ((e / 3) as usize, (e % 3) as usize);
+    let (b, c) = ((axis + 1) % 3, (axis + 2) % 3);
+    [
+        (b * 2 + ((lo >> b) & 1)) as u8,
+        (c * 2 + ((lo >> c) & 1)) as u8,
+    ]
+}
+
+/// True when two non-consecutive vertices of a loop lie on one cube face, so that a fan
+/// diagonal between them might also be a triangle edge in the neighbouring cube.
+fn fan_could_repeat(edges: &[u8]) -> bool {
+    let n = edges.len();
+    for i in 0..n {
+        for j in i + 2..n {
+            if i == 0 && j == n - 1 {
+                continue;
+            }
+            let (a, b) = (edge_faces(edges[i]), edge_faces(edges[j]));
+            if a.iter().any(|x| b.contains(x)) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
 /// Polygonizes the zero set of `f` reachable from the cubes holding `seeds`, on a grid of cube
 /// edge `cell` over `domain`. Corners outside the domain count as outside (f > 0), so the mesh is
 /// closed even where the zero set would leave the domain.
@@ -354,8 +385,25 @@ pub fn marching_cubes<F: Implicit + ?Sized>(
                     (mesh.positions.len() - 1) as u32
                 });
             }
-            for k in 1..len - 1 {
-                mesh.faces.push([ids[0], ids[k], ids[k + 1]]);
+            let edges = &loops.edges[at..at + len];
+            if len > 3 && fan_could_repeat(edges) {
+                // A fan diagonal between two vertices on one cube face could also be an edge of
+                // the neighbouring cube's triangles (a non-manifold edge): a star around a new
+                // centre vertex, private to this cube, instead.
+                let centre = ids[..len]
+                    .iter()
+                    .map(|&i| mesh.positions[i as usize].coords)
+                    .sum::<Vector3<f64>>()
+                    / len as f64;
+                mesh.positions.push(Point3::from(centre));
+                let m = (mesh.positions.len() - 1) as u32;
+                for k in 0..len {
+                    mesh.faces.push([m, ids[k], ids[(k + 1) % len]]);
+                }
+            } else {
+                for k in 1..len - 1 {
+                    mesh.faces.push([ids[0], ids[k], ids[k + 1]]);
+                }
             }
             at += len;
         }
@@ -435,6 +483,82 @@ mod tests {
             let t = Topology::build(&m);
             assert!(t.is_closed_manifold(), "cell {cell}");
             assert!(m.signed_volume() > 0.0);
+        }
+    }
+
+    /// A wavy field with many saddles: lots of ambiguous faces and loops of 4 to 7 vertices.
+    struct Waves;
+    impl Implicit for Waves {
+        fn value(&self, x: &Point3<f64>) -> f64 {
+            (7.0 * x.x).sin() * (5.0 * x.y).cos() + (6.0 * x.z).sin() * (4.0 * x.x).cos()
+                - 0.2 * (9.0 * x.y).sin()
+                + x.coords.norm_squared()
+                - 0.8
+        }
+    }
+
+    /// Independent pseudo-random values at the corners of a grid of edge 0.1 (every kind of
+    /// cube configuration, ambiguous faces everywhere), positive outside a ball.
+    struct Noise;
+    impl Implicit for Noise {
+        fn value(&self, x: &Point3<f64>) -> f64 {
+            if x.coords.norm() > 0.9 {
+                return 1.0;
+            }
+            let k = x.coords.map(|c| (c * 10.0).round() as i64);
+            let mut h = (k.x as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                ^ (k.y as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+                ^ (k.z as u64).wrapping_mul(0x1656_67B1_9E37_79F9);
+            h ^= h >> 29;
+            h = h.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            h ^= h >> 32;
+            (h % 2001) as f64 / 1000.0 - 1.0
+        }
+    }
+
+    #[test]
+    fn random_corner_values_stay_manifold() {
+        let seeds: Vec<_> = (0..2000)
+            .map(|i| {
+                let t = i as f64 * 0.731;
+                Point3::new(
+                    t.sin() * 0.8,
+                    (1.37 * t).cos() * 0.8,
+                    (0.53 * t).sin() * 0.8,
+                )
+            })
+            .collect();
+        let m = marching_cubes(&Noise, &seeds, &domain(1.0), 0.1).unwrap();
+        let t = Topology::build(&m);
+        assert!(m.faces.len() > 1000);
+        assert!(
+            t.is_closed_manifold(),
+            "boundary {} non-manifold edges {} vertices {}",
+            t.boundary_edge_count(),
+            t.non_manifold_edges.len(),
+            t.non_manifold_vertices.len()
+        );
+    }
+
+    #[test]
+    fn saddles_stay_manifold() {
+        for cell in [0.031, 0.047, 0.063, 0.089, 0.13] {
+            let seeds: Vec<_> = (0..200)
+                .map(|i| {
+                    let t = i as f64 * 0.31;
+                    Point3::new(t.sin() * 0.9, (1.7 * t).cos() * 0.9, (0.7 * t).sin() * 0.9)
+                })
+                .collect();
+            let m = marching_cubes(&Waves, &seeds, &domain(1.3), cell).unwrap();
+            let t = Topology::build(&m);
+            assert!(!m.faces.is_empty());
+            assert!(
+                t.is_closed_manifold(),
+                "cell {cell}: boundary {} non-manifold edges {} vertices {}",
+                t.boundary_edge_count(),
+                t.non_manifold_edges.len(),
+                t.non_manifold_vertices.len()
+            );
         }
     }
 

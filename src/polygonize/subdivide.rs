@@ -26,6 +26,8 @@ pub struct RefineOptions {
     pub max_levels: usize,
     /// Relaxation rounds after each subdivision.
     pub relax_iterations: usize,
+    /// No subdivision that would make more triangles than this.
+    pub max_faces: usize,
 }
 
 /// What [`refine`] did.
@@ -73,7 +75,7 @@ pub fn gap_quantile(gaps: &[f64], q: f64) -> (f64, f64) {
     (v, gaps.iter().copied().fold(0.0, f64::max))
 }
 
-/// Subdivides and projects until [`surface_gap`] is within the tolerance or `max_levels` is
+/// Subdivides and projects until the gap quantile ([`surface_gaps`]) is within the tolerance or `max_levels` is
 /// reached.
 pub fn refine<F: Implicit + ?Sized>(
     mut mesh: Mesh,
@@ -86,7 +88,11 @@ pub fn refine<F: Implicit + ?Sized>(
         let (gap, max) = gap_quantile(&surface_gaps(&mesh, f), opts.quantile);
         report.gaps.push(gap);
         report.max_gaps.push(max);
-        if gap <= opts.tolerance || report.levels >= opts.max_levels || mesh.faces.is_empty() {
+        if gap <= opts.tolerance
+            || report.levels >= opts.max_levels
+            || mesh.faces.is_empty()
+            || mesh.faces.len().saturating_mul(4) > opts.max_faces
+        {
             break;
         }
         let n_old = mesh.positions.len();
@@ -138,6 +144,7 @@ mod tests {
             quantile: 1.0,
             max_levels: 4,
             relax_iterations: 1,
+            max_faces: usize::MAX,
         };
         let (r, rep) = refine(
             m.clone(),
