@@ -1,0 +1,199 @@
+//! The quad net stage of `fit` in one call: choose the voxel size (from `--patches N` or
+//! `--patch-size L`), build the regularized voxel net, project it onto the implicit and smooth
+//! it there (seed 004 section 3). The report is what `--report` JSON shows for this stage.
+
+use crate::implicit::Implicit;
+use crate::mesh::Aabb;
+use crate::polygonize::net_smooth::{project_and_smooth, SmoothOptions, SmoothReport};
+use crate::polygonize::patch_count::{net_for_patch_count, PatchCountReport};
+use crate::polygonize::voxel_net::{build_voxel_net, VoxelNetOptions, VoxelNetStats};
+use crate::polygonize::QuadNet;
+use crate::{Error, Result};
+use nalgebra::Point3;
+
+/// How big the patches should be.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PatchSize {
+    /// About this many patches (within 15 %): `--patches N`.
+    Count(usize),
+    /// Voxel edge, the nominal patch edge: `--patch-size L`.
+    Edge(f64),
+}
+
+/// Default patch count of `fit`.
+pub const DEFAULT_PATCHES: usize = 1500;
+
+/// What the net stage did and how good the net is.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct NetReport {
+    /// Voxel edge used.
+    pub h: f64,
+    pub patches: usize,
+    pub nodes: usize,
+    pub edges: usize,
+    /// V - E + F (2 per sphere-like component).
+    pub euler_characteristic: i64,
+    pub components: usize,
+    /// Entry k: number of nodes with k quads.
+    pub valence_histogram: Vec<usize>,
+    pub voxels: VoxelNetStats,
+    /// Present when the size came from a patch count.
+    pub patch_count: Option<PatchCountReport>,
+    /// Quality right after projection and after smoothing.
+    pub smoothing: SmoothReport,
+}
+
+/// Builds, projects and smooths the quad net of f = 0 near `seeds` (points on or near the
+/// surface, e.g. the input cloud; at least one per surface component) within `bounds`.
+/// Errors: an invalid size, no seed near the surface, and the failures of the stages.
+pub fn fit_net<I: Implicit + ?Sized>(
+    f: &I,
+    seeds: &[Point3<f64>],
+    bounds: &Aabb,
+    size: PatchSize,
+) -> Result<(QuadNet, NetReport)> {
+    let scale = bounds.diagonal();
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(Error::Degenerate(
+            "bounding box is empty or not finite".into(),
+        ));
+    }
+    let (voxel_net, patch_count) = match size {
+        PatchSize::Count(n) => {
+            let (v, r) = net_for_patch_count(f, seeds, bounds, n)?;
+            (v, Some(r))
+        }
+        PatchSize::Edge(l) => {
+            if !(l.is_finite() && l > 0.0) {
+                return Err(Error::InvalidOption(format!(
+                    "patch size must be a positive length, got {l}"
+                )));
+            }
+            (
+                build_voxel_net(f, seeds, bounds, &VoxelNetOptions::new(l))?,
+                None,
+            )
+        }
+    };
+    let h = voxel_net.h;
+    let mut net = voxel_net.net;
+    let smoothing = project_and_smooth(&mut net, f, &SmoothOptions::new(scale, h))?;
+    let report = NetReport {
+        h,
+        patches: net.quads.len(),
+        nodes: net.nodes.len(),
+        edges: net.edges.len(),
+        euler_characteristic: net.euler_characteristic(),
+        components: net.components().1,
+        valence_histogram: net.valence_histogram(),
+        voxels: voxel_net.stats,
+        patch_count,
+        smoothing,
+    };
+    Ok((net, report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::polygonize::test_shapes::*;
+
+    #[test]
+    fn torus_by_count_and_by_size() {
+        let t = Torus {
+            big: 1.0,
+            small: 0.3,
+        };
+        let b = aabb([-1.3, -1.3, -0.3], [1.3, 1.3, 0.3]);
+        let seeds = seeds_on(&t, Point3::origin(), 1.4, 60);
+        let (net, r) = fit_net(&t, &seeds, &b, PatchSize::Count(600)).unwrap();
+        assert!((net.quads.len() as f64 - 600.0).abs() <= 90.0);
+        assert_eq!(r.euler_characteristic, 0);
+        assert_eq!(r.smoothing.smoothed.flipped, 0);
+        let json = serde_json::to_string(&r).unwrap();
+        assert!(json.contains("\"min_angle_deg\""));
+        let (net2, r2) = fit_net(&t, &seeds, &b, PatchSize::Edge(r.h)).unwrap();
+        assert_eq!(net2, net);
+        assert!(r2.patch_count.is_none());
+        assert!(fit_net(&t, &seeds, &b, PatchSize::Edge(-1.0)).is_err());
+        assert!(fit_net(&t, &seeds, &b, PatchSize::Count(0)).is_err());
+    }
+
+    /// The whole net + samples pipeline on the Stanford bunny, with an IMLS implicit standing in
+    /// for the real one. Prints the numbers for the report; run with
+    /// `cargo test --release --lib bunny_pipeline -- --ignored --nocapture`.
+    #[test]
+    #[ignore]
+    fn bunny_pipeline() {
+        use crate::fit::samples::{sample_patches, SampleOptions};
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        use std::time::Instant;
+        struct Counted<'a>(&'a Imls, AtomicUsize);
+        impl Implicit for Counted<'_> {
+            fn value(&self, x: &Point3<f64>) -> f64 {
+                self.1.fetch_add(1, Ordering::Relaxed);
+                self.0.value(x)
+            }
+            fn gradient(&self, x: &Point3<f64>) -> nalgebra::Vector3<f64> {
+                self.1.fetch_add(1, Ordering::Relaxed);
+                self.0.gradient(x)
+            }
+            fn value_and_gradient(&self, x: &Point3<f64>) -> (f64, nalgebra::Vector3<f64>) {
+                self.1.fetch_add(1, Ordering::Relaxed);
+                self.0.value_and_gradient(x)
+            }
+        }
+        let mesh = load_obj("/work/shared/data/stanford-bunny.obj");
+        let mut normals = crate::mesh::normals::vertex_normals(&mesh);
+        let b = mesh.aabb().unwrap();
+        let diag = b.diagonal();
+        let spacing = (b.max - b.min).norm() / (mesh.positions.len() as f64).sqrt();
+        let t0 = Instant::now();
+        let (fill, fill_n) = hole_fill_points(&mesh, spacing);
+        eprintln!(
+            "bunny: {} holes filled with {} points",
+            mesh.topology().loops.len(),
+            fill.len()
+        );
+        let mut pts = mesh.positions.clone();
+        pts.extend(fill);
+        normals.extend(fill_n);
+        let imls = Imls::new(pts, normals, 0.8 * spacing);
+        eprintln!(
+            "bunny: {} points, diag {diag:.4}, sigma {:.2e}, tree {:?}",
+            mesh.positions.len(),
+            1.5 * spacing,
+            t0.elapsed()
+        );
+        let f = Counted(&imls, AtomicUsize::new(0));
+        for target in [1500, 3642] {
+            f.1.store(0, Ordering::Relaxed);
+            let t1 = Instant::now();
+            let (net, r) = fit_net(&f, &mesh.positions, &b, PatchSize::Count(target)).unwrap();
+            let net_evals = f.1.load(Ordering::Relaxed);
+            let t_net = t1.elapsed();
+            eprintln!(
+                "N={target}: {} patches (tries {:?}), h {:.3e}, chi {}, components {}, valences {:?}",
+                r.patches, r.patch_count.as_ref().map(|p| &p.tries), r.h, r.euler_characteristic, r.components, r.valence_histogram
+            );
+            eprintln!("   voxels {:?}", r.voxels);
+            eprintln!("   projected {:?}", r.smoothing.projected);
+            eprintln!(
+                "   smoothed ({} it) {:?}",
+                r.smoothing.iterations, r.smoothing.smoothed
+            );
+            eprintln!("   net: {net_evals} implicit evaluations, {t_net:?}");
+            f.1.store(0, Ordering::Relaxed);
+            let t2 = Instant::now();
+            let ps = sample_patches(&net, &f, &SampleOptions::new(1e-4 * diag, diag)).unwrap();
+            eprintln!(
+                "   samples: {:?}, {} evaluations, {:?}",
+                ps.report,
+                f.1.load(Ordering::Relaxed),
+                t2.elapsed()
+            );
+            assert_eq!(r.smoothing.smoothed.flipped, 0);
+            assert_eq!(r.smoothing.smoothed.degenerate, 0);
+        }
+    }
+}
