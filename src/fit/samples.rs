@@ -15,7 +15,8 @@
 //! the sample rows) and at the cell centres (an estimate); where it exceeds the tolerance, raise the
 //! ribbon's count to S (dev / tol)^(1/4) x 1.1 (the error of cubic interpolation falls like the
 //! fourth power of the spacing), rebuild the patches touching changed ribbons, and repeat; a
-//! quad whose deviation fell less than 4x while its count tripled is "stalled" and stops driving
+//! quad whose deviation fell by less than r^2 once its count rose by r >= 2 (r^4 is expected)
+//! is "stalled" and stops driving
 //! refinement (otherwise one unresolvable patch would push its whole ribbon to the cap). A
 //! ribbon takes the largest count any of its quads needs, so one curved spot densifies its whole
 //! strip: the price of a tensor-product network without T-junctions.
@@ -72,7 +73,8 @@ pub struct SampleOptions {
     pub tolerance: f64,
     /// Model size (bounding-box diagonal): root-finding tolerances are 1e-12 of it.
     pub scale: f64,
-    /// Fewest and most intervals per side.
+    /// Fewest and most intervals per side (defaults 2 and 16; the cap bounds the cost where
+    /// the tolerance cannot be met, e.g. an implicit wobbling at its own fit tolerance).
     pub min_intervals: usize,
     pub max_intervals: usize,
     /// Refinement rounds.
@@ -85,7 +87,7 @@ impl SampleOptions {
             tolerance,
             scale,
             min_intervals: 2,
-            max_intervals: 48,
+            max_intervals: 16,
             max_rounds: 6,
         }
     }
@@ -130,6 +132,9 @@ pub struct PatchSamples {
     /// Interior samples that could not be moved onto f = 0 and were left at their Coons point
     /// (0 unless the implicit misbehaves there).
     pub unprojected: usize,
+    /// Largest |f| / |grad f| over the samples (about 1e-12 of the model size; larger where
+    /// the implicit jumps across zero and a sample sits on the jump).
+    pub max_residual: f64,
 }
 
 impl PatchSamples {
@@ -157,8 +162,11 @@ impl PatchSamples {
 pub struct SampleReport {
     pub rounds: usize,
     pub ribbons: usize,
-    /// Largest estimated deviation over all patches.
+    /// Largest estimated deviation over all patches, and the median and 95th percentile of the
+    /// per-patch deviations.
     pub max_deviation: f64,
+    pub p50_deviation: f64,
+    pub p95_deviation: f64,
     /// Patches whose estimated deviation exceeds the tolerance (at `max_intervals`).
     pub over_tolerance: usize,
     /// Total grid points over all patches, and distinct ones on edges.
@@ -172,8 +180,12 @@ pub struct SampleReport {
     pub edges_projected_chord: usize,
     /// Interior samples left off the surface (see [`PatchSamples::unprojected`]).
     pub unprojected_samples: usize,
-    /// Patches whose deviation fell less than 4x while their sample count tripled: they stopped
-    /// driving refinement (patches wrapping a part thinner than themselves, implicit defects).
+    /// Largest |f| / |grad f| over all samples, and the patches with a sample farther than
+    /// 1e-9 of the model size from f = 0 (implicit defects: f jumping across zero).
+    pub max_sample_residual: f64,
+    pub patches_off_surface: usize,
+    /// Patches whose deviation fell by less than r^2 once their sample count rose by r >= 2:
+    /// they stopped driving refinement (patches wrapping a part thinner than themselves, implicit defects).
     pub stalled: usize,
 }
 
@@ -252,11 +264,17 @@ pub fn sample_patches<I: Implicit + ?Sized>(
             let du = p.deviation_u.max(p.deviation_cell);
             let dv = p.deviation_v.max(p.deviation_cell);
             for (dir, dev, n) in [(0, du, p.s()), (1, dv, p.t())] {
+                // Raised by r >= 2 since the first build: cubic interpolation should have cut
+                // the deviation by r^4; less than r^2 means the patch does not converge (a
+                // feature below the sample spacing, a jump of the implicit).
                 let (n0, d0) = first[q][dir];
                 if n0 == 0 {
                     first[q][dir] = (n, dev);
-                } else if n >= 3 * n0 && dev > 0.25 * d0 {
-                    stalled[q][dir] = true;
+                } else if n >= 2 * n0 {
+                    let r = n as f64 / n0 as f64;
+                    if dev > d0 / (r * r) {
+                        stalled[q][dir] = true;
+                    }
                 }
                 if dev > opt.tolerance && !stalled[q][dir] {
                     let r = rib.of_quad[q][dir] as usize;
@@ -344,6 +362,8 @@ fn finish(
         .collect::<Option<_>>()
         .ok_or_else(|| Error::Numerical("a quad was left without samples".into()))?;
     let dev = |p: &PatchSamples| p.deviation();
+    let mut devs: Vec<f64> = patches.iter().map(dev).collect();
+    devs.sort_by(f64::total_cmp);
     let mut hist = std::collections::BTreeMap::new();
     for &n in &intervals {
         *hist.entry(n).or_insert(0usize) += 1;
@@ -352,6 +372,8 @@ fn finish(
         rounds,
         ribbons: rib.count,
         max_deviation: patches.iter().map(dev).fold(0.0, f64::max),
+        p50_deviation: quantile(&devs, 0.5),
+        p95_deviation: quantile(&devs, 0.95),
         over_tolerance: patches.iter().filter(|p| dev(p) > opt.tolerance).count(),
         grid_points: patches.iter().map(|p| (p.s() + 1) * (p.t() + 1)).sum(),
         interval_histogram: hist.into_iter().collect(),
@@ -368,6 +390,11 @@ fn finish(
             .filter(|e| e.method == EdgeMethod::ProjectedChord)
             .count(),
         unprojected_samples: patches.iter().map(|p| p.unprojected).sum(),
+        max_sample_residual: patches.iter().map(|p| p.max_residual).fold(0.0, f64::max),
+        patches_off_surface: patches
+            .iter()
+            .filter(|p| p.max_residual > 1e-9 * opt.scale)
+            .count(),
         stalled,
     };
     Ok(PatchSampling {
@@ -408,6 +435,14 @@ fn side(e: &EdgeSamples, reversed: bool) -> Side {
 
 fn tangent_part(x: Vector3<f64>, n: &Vector3<f64>) -> Vector3<f64> {
     x - n * n.dot(&x)
+}
+
+/// The q-quantile of sorted values (nearest rank; 0 for none).
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    sorted[((sorted.len() - 1) as f64 * q).round() as usize]
 }
 
 /// Derivative at p[0] of the polynomial through p[0], p[1], ... at uniform steps `h`, of
@@ -658,6 +693,10 @@ fn build_patch<I: Implicit + ?Sized>(
         })
         .collect();
     let deviation_u = row_mids.iter().map(|r| max_dist(r)).fold(0.0, f64::max);
+    let max_residual = points
+        .iter()
+        .map(|col| max_dist(&col.iter().map(|p| p.coords).collect::<Vec<_>>()))
+        .fold(0.0, f64::max);
     let deviation_v = (0..=s)
         .map(|i| {
             let col: Vec<Vector3<f64>> = points[i].iter().map(|p| p.coords).collect();
@@ -703,6 +742,7 @@ fn build_patch<I: Implicit + ?Sized>(
         deviation_v,
         deviation_cell,
         unprojected,
+        max_residual,
     })
 }
 
