@@ -22,6 +22,18 @@
 //! uniform parameters fit them (seed 004 eq. 9's square-root chord parameters of equally spaced
 //! points are uniform).
 //!
+//! **Fallback: tracing.** When a line of the family misses the surface, meets it at a grazing
+//! angle, or the samples come out of order (a hairpin around the rim of a part thinner than the
+//! edge is long, like the bunny's ears at 1,500 patches), the section curve is traced instead:
+//! steps of L / 32 along the curve tangent (plane normal x grad f), each corrected onto f = 0 by
+//! Newton inside the plane, until B is reached; the polyline is resampled at equal arc lengths
+//! and each sample corrected again. Tangents are then the unit tangent times the traced length.
+//!
+//! **Last resort.** If tracing fails too (an implicit with a near-zero plateau or a jump in the
+//! plane), the chord points are projected along the gradient and the tangents are the chord
+//! projected onto the tangent plane: still shared by both patches (watertight), not a plane
+//! curve, counted in the sampling report.
+//!
 //! **Tangents.** Differentiating f(o + s dir) = 0 along the family:
 //!
 //!   s' = -grad f . (o' + s dir') / (grad f . dir),   dC/dt = o' + s' dir + s dir',
@@ -36,6 +48,17 @@ use crate::polygonize::newton::solve_on_line;
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 
+/// How an edge's samples were found (module doc), best first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum EdgeMethod {
+    /// Roots on a family of lines of the section plane (chord stations or polar).
+    Lines,
+    /// Tracing of the section curve.
+    Traced,
+    /// Last resort: chord points projected along the gradient (not a plane curve).
+    ProjectedChord,
+}
+
 /// The samples of one edge, in its canonical direction (lower node to higher node).
 #[derive(Debug, Clone, PartialEq)]
 pub struct EdgeSamples {
@@ -45,6 +68,10 @@ pub struct EdgeSamples {
     pub tangents: Vec<Vector3<f64>>,
     /// Unit normals grad f / |grad f| at each point.
     pub normals: Vec<Vector3<f64>>,
+    pub method: EdgeMethod,
+    /// Unit in-plane normal w of the section plane (orthogonal to the chord; the plane is
+    /// spanned by the chord and w), independent of the direction the edge is walked.
+    pub plane_w: Vector3<f64>,
 }
 
 impl EdgeSamples {
@@ -116,6 +143,40 @@ pub fn sample_edge<I: Implicit + ?Sized>(
     n: usize,
     tol: f64,
 ) -> Result<EdgeSamples> {
+    sample_curve(f, a, b, Plane::FromNormals(net_normal), n, tol)
+}
+
+/// Samples the section of f = 0 from `a` to `b` in the plane through a and b containing the
+/// direction `w` (its component orthogonal to b - a), as [`sample_edge`] does for a net edge.
+/// The patch sampler uses it for interior rows, with w blended from the two boundary edges'
+/// [`EdgeSamples::plane_w`] so that the rows continue the boundaries.
+pub fn sample_section<I: Implicit + ?Sized>(
+    f: &I,
+    a: Point3<f64>,
+    b: Point3<f64>,
+    w: Vector3<f64>,
+    n: usize,
+    tol: f64,
+) -> Result<EdgeSamples> {
+    sample_curve(f, a, b, Plane::Given(w), n, tol)
+}
+
+/// How the section plane is chosen.
+enum Plane {
+    /// From the end normals, the net's normal breaking ties.
+    FromNormals(Vector3<f64>),
+    /// Containing this direction.
+    Given(Vector3<f64>),
+}
+
+fn sample_curve<I: Implicit + ?Sized>(
+    f: &I,
+    a: Point3<f64>,
+    b: Point3<f64>,
+    plane: Plane,
+    n: usize,
+    tol: f64,
+) -> Result<EdgeSamples> {
     let e = b - a;
     let len = e.norm();
     let where_ = || {
@@ -139,7 +200,10 @@ pub fn sample_edge<I: Implicit + ?Sized>(
             where_()
         )));
     };
-    let m = na + nb + unit(net_normal).unwrap_or_else(Vector3::zeros);
+    let m = match plane {
+        Plane::FromNormals(hint) => na + nb + unit(hint).unwrap_or_else(Vector3::zeros),
+        Plane::Given(w) => w,
+    };
     let w = m - x * m.dot(&x);
     let Some(w) = unit(w).filter(|_| w.norm() > 1e-6) else {
         return Err(Error::Numerical(format!(
@@ -182,6 +246,86 @@ pub fn sample_edge<I: Implicit + ?Sized>(
             r,
         }
     };
+    let family = sample_family(f, &fam, a, b, ga, gb, n, tol, len).filter(ordered);
+    if let Some(mut es) = family {
+        es.plane_w = w;
+        return Ok(es);
+    }
+    // The family missed (a hairpin around the rim of a part thinner than the edge, a second
+    // sheet crossing a line): trace the section curve instead.
+    let (o, d_o, dir, d_dir) = fam.line(0.0);
+    let s0 = (a - o).dot(&dir);
+    let start = d_o + dir * (-ga.dot(&(d_o + d_dir * s0)) / ga.dot(&dir)) + d_dir * s0;
+    let start = if start.iter().all(|v| v.is_finite()) {
+        start
+    } else {
+        e
+    };
+    trace_section(f, a, b, ga, gb, x.cross(&w), start, n, tol, len)
+        .or_else(|_| projected_chord(f, a, b, ga, gb, n, tol))
+        .map(|mut es| {
+            es.plane_w = w;
+            es
+        })
+        .map_err(|err| Error::Numerical(format!("{}: {err}", where_())))
+}
+
+/// Last resort: the chord points at t = k / n projected onto f = 0 along the gradient; the
+/// tangents are the chord projected onto the tangent plane (an approximation of d/dt).
+fn projected_chord<I: Implicit + ?Sized>(
+    f: &I,
+    a: Point3<f64>,
+    b: Point3<f64>,
+    ga: Vector3<f64>,
+    gb: Vector3<f64>,
+    n: usize,
+    tol: f64,
+) -> Result<EdgeSamples> {
+    let e = b - a;
+    let opt = crate::polygonize::newton::NewtonOptions {
+        tol,
+        accept: 1e3 * tol,
+        max_step: 0.5 * e.norm(),
+        max_iter: 60,
+    };
+    let mut es = EdgeSamples {
+        points: Vec::with_capacity(n + 1),
+        tangents: Vec::with_capacity(n + 1),
+        normals: Vec::with_capacity(n + 1),
+        method: EdgeMethod::ProjectedChord,
+        plane_w: Vector3::zeros(),
+    };
+    for k in 0..=n {
+        let (p, g) = if k == 0 {
+            (a, ga)
+        } else if k == n {
+            (b, gb)
+        } else {
+            crate::polygonize::newton::project(f, a + e * (k as f64 / n as f64), &opt)?
+        };
+        let nn =
+            unit(g).ok_or_else(|| Error::Numerical("the implicit's gradient vanishes".into()))?;
+        es.points.push(p);
+        es.tangents.push(e - nn * nn.dot(&e));
+        es.normals.push(nn);
+    }
+    Ok(es)
+}
+
+/// Samples at t = k / n on the lines of the family; None when a line misses the surface or
+/// meets it at a grazing angle.
+#[allow(clippy::too_many_arguments)]
+fn sample_family<I: Implicit + ?Sized>(
+    f: &I,
+    fam: &Family,
+    a: Point3<f64>,
+    b: Point3<f64>,
+    ga: Vector3<f64>,
+    gb: Vector3<f64>,
+    n: usize,
+    tol: f64,
+    len: f64,
+) -> Option<EdgeSamples> {
     let mut points = Vec::with_capacity(n + 1);
     let mut tangents = Vec::with_capacity(n + 1);
     let mut normals = Vec::with_capacity(n + 1);
@@ -192,33 +336,156 @@ pub fn sample_edge<I: Implicit + ?Sized>(
             let p = if k == 0 { a } else { b };
             (p, (p - o).dot(&dir), if k == 0 { ga } else { gb })
         } else {
-            let (s0, window) = match fam {
+            let (s0, window) = match *fam {
                 Family::Chord { .. } => (0.0, len),
                 Family::Polar { r, .. } => (r, r.min(len)),
             };
-            let (ds, g) = solve_on_line(f, o + dir * s0, dir, window, tol)
-                .map_err(|err| Error::Numerical(format!("{}: {err}", where_())))?;
+            let (ds, g) = solve_on_line(f, o + dir * s0, dir, window, tol).ok()?;
             let s = s0 + ds;
             (o + dir * s, s, g)
         };
         let gd = g.dot(&dir);
-        if gd.abs() <= 1e-9 * g.norm() || gd.is_nan() {
-            return Err(Error::Numerical(format!(
-                "{}: section line tangent to the surface",
-                where_()
-            )));
+        if gd.abs() <= 0.05 * g.norm() || gd.is_nan() {
+            return None;
         }
         let ds = -g.dot(&(d_o + d_dir * s)) / gd;
         points.push(p);
         tangents.push(d_o + dir * ds + d_dir * s);
-        normals.push(unit(g).ok_or_else(|| {
-            Error::Numerical(format!("{}: the implicit's gradient vanishes", where_()))
-        })?);
+        normals.push(unit(g)?);
+    }
+    Some(EdgeSamples {
+        points,
+        tangents,
+        normals,
+        method: EdgeMethod::Lines,
+        plane_w: Vector3::zeros(),
+    })
+}
+
+/// True when the samples run along one curve: consecutive gaps within 2.5 times their mean and
+/// consecutive tangents pointing the same way and along the gaps.
+fn ordered(es: &EdgeSamples) -> bool {
+    let n = es.intervals();
+    let gaps: Vec<f64> = es.points.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
+    let mean = gaps.iter().sum::<f64>() / n as f64;
+    gaps.iter().all(|&g| g <= 2.5 * mean)
+        && (0..n).all(|k| {
+            let d = es.points[k + 1] - es.points[k];
+            es.tangents[k].dot(&es.tangents[k + 1]) > 0.0
+                && es.tangents[k].dot(&d) > 0.0
+                && es.tangents[k + 1].dot(&d) > 0.0
+        })
+}
+
+/// Traces the section of f = 0 by the plane through `a` with unit normal `m` from a to b
+/// (first step along `start`), in steps of L / 32 with Newton corrections inside the plane,
+/// then resamples it at n + 1 equal arc lengths. Tangents: unit curve tangent times the traced
+/// length (the derivative for the arc-length parameter on [0, 1]).
+#[allow(clippy::too_many_arguments)]
+fn trace_section<I: Implicit + ?Sized>(
+    f: &I,
+    a: Point3<f64>,
+    b: Point3<f64>,
+    ga: Vector3<f64>,
+    gb: Vector3<f64>,
+    m: Vector3<f64>,
+    start: Vector3<f64>,
+    n: usize,
+    tol: f64,
+    len: f64,
+) -> Result<EdgeSamples> {
+    let step = len / 32.0;
+    let in_plane = |g: &Vector3<f64>| g - m * m.dot(g);
+    let along = |g: &Vector3<f64>| unit(m.cross(g));
+    let correct = |mut p: Point3<f64>| -> Result<(Point3<f64>, Vector3<f64>)> {
+        for _ in 0..30 {
+            let (v, g) = f.value_and_gradient(&p);
+            let gp = in_plane(&g);
+            let gp2 = gp.norm_squared();
+            if !(v.is_finite() && gp2 > 0.0 && gp2.is_finite()) {
+                break;
+            }
+            if v.abs() <= 1e3 * tol * gp2.sqrt() {
+                return Ok((p, g));
+            }
+            let mut d = gp * (-v / gp2);
+            let dn = d.norm();
+            if dn > step {
+                d *= step / dn;
+            }
+            p += d;
+        }
+        Err(Error::Numerical("tracing lost the surface".into()))
+    };
+    let mut t =
+        along(&ga).ok_or_else(|| Error::Numerical("gradient along the section normal".into()))?;
+    if t.dot(&start) < 0.0 {
+        t = -t;
+    }
+    let mut poly = vec![a];
+    let (mut p, mut travelled) = (a, 0.0);
+    loop {
+        if (b - p).norm() <= 1.5 * step && (b - p).dot(&t) > 0.0 {
+            poly.push(b);
+            break;
+        }
+        if travelled > 24.0 * len || poly.len() > 24 * 32 {
+            return Err(Error::Numerical(
+                "the section curve does not reach the edge's end".into(),
+            ));
+        }
+        let (q, gq) = correct(p + t * step)?;
+        let mut tq = along(&gq)
+            .ok_or_else(|| Error::Numerical("gradient along the section normal".into()))?;
+        if tq.dot(&t) < 0.0 {
+            tq = -tq;
+        }
+        travelled += (q - p).norm();
+        poly.push(q);
+        p = q;
+        t = tq;
+    }
+    // Resample at equal arc lengths.
+    let mut cum = vec![0.0];
+    for w in poly.windows(2) {
+        cum.push(cum.last().copied().unwrap_or(0.0) + (w[1] - w[0]).norm());
+    }
+    let total = cum.last().copied().unwrap_or(0.0);
+    let mut points = Vec::with_capacity(n + 1);
+    let mut tangents = Vec::with_capacity(n + 1);
+    let mut normals = Vec::with_capacity(n + 1);
+    let mut seg = 0;
+    for k in 0..=n {
+        let target = total * k as f64 / n as f64;
+        while seg + 2 < poly.len() && cum[seg + 1] < target {
+            seg += 1;
+        }
+        let d = poly[seg + 1] - poly[seg];
+        let (p, g) = if k == 0 {
+            (a, ga)
+        } else if k == n {
+            (b, gb)
+        } else {
+            let u = ((target - cum[seg]) / (cum[seg + 1] - cum[seg]).max(1e-300)).clamp(0.0, 1.0);
+            correct(poly[seg] + d * u)?
+        };
+        let mut tk = along(&g)
+            .ok_or_else(|| Error::Numerical("gradient along the section normal".into()))?;
+        if tk.dot(&d) < 0.0 {
+            tk = -tk;
+        }
+        points.push(p);
+        tangents.push(tk * total);
+        normals.push(
+            unit(g).ok_or_else(|| Error::Numerical("the implicit's gradient vanishes".into()))?,
+        );
     }
     Ok(EdgeSamples {
         points,
         tangents,
         normals,
+        method: EdgeMethod::Traced,
+        plane_w: Vector3::zeros(),
     })
 }
 

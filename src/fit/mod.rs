@@ -2,6 +2,8 @@
 //! (seed 004 section 3, Fig. 5(c)): sample grids on f = 0 with boundary tangents, shared
 //! bit-for-bit along every net edge so that the patch network is watertight by construction.
 //!
+//! - [`net`]: the quad net stage (voxel size from the patch count, voxel net, projection and
+//!   smoothing) in one call;
 //! - [`ribbons`]: quad strips (ribbons) of edges that must share one sample count;
 //! - [`edge_curve`]: the samples and tangents of one net edge, from that edge's data alone;
 //! - [`spline_check`]: the complete cubic spline a row of samples will become, for the

@@ -92,3 +92,114 @@ pub fn fit_net<I: Implicit + ?Sized>(
     };
     Ok((net, report))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::polygonize::test_shapes::*;
+
+    #[test]
+    fn torus_by_count_and_by_size() {
+        let t = Torus {
+            big: 1.0,
+            small: 0.3,
+        };
+        let b = aabb([-1.3, -1.3, -0.3], [1.3, 1.3, 0.3]);
+        let seeds = seeds_on(&t, Point3::origin(), 1.4, 60);
+        let (net, r) = fit_net(&t, &seeds, &b, PatchSize::Count(600)).unwrap();
+        assert!((net.quads.len() as f64 - 600.0).abs() <= 90.0);
+        assert_eq!(r.euler_characteristic, 0);
+        assert_eq!(r.smoothing.smoothed.flipped, 0);
+        let json = serde_json::to_string(&r).unwrap();
+        assert!(json.contains("\"min_angle_deg\""));
+        let (net2, r2) = fit_net(&t, &seeds, &b, PatchSize::Edge(r.h)).unwrap();
+        assert_eq!(net2, net);
+        assert!(r2.patch_count.is_none());
+        assert!(fit_net(&t, &seeds, &b, PatchSize::Edge(-1.0)).is_err());
+        assert!(fit_net(&t, &seeds, &b, PatchSize::Count(0)).is_err());
+    }
+
+    /// The whole net + samples pipeline on the Stanford bunny, with an IMLS implicit standing in
+    /// for the real one (slow-ish and rough, hence ignored). Prints the numbers; run with
+    /// `cargo test --release --lib bunny_pipeline -- --ignored --nocapture`.
+    #[test]
+    #[ignore]
+    fn bunny_pipeline() {
+        use crate::fit::samples::{sample_patches, SampleOptions};
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        use std::time::Instant;
+        struct Counted<'a>(&'a Imls, AtomicUsize);
+        impl Implicit for Counted<'_> {
+            fn value(&self, x: &Point3<f64>) -> f64 {
+                self.1.fetch_add(1, Ordering::Relaxed);
+                self.0.value(x)
+            }
+            fn gradient(&self, x: &Point3<f64>) -> nalgebra::Vector3<f64> {
+                self.1.fetch_add(1, Ordering::Relaxed);
+                self.0.gradient(x)
+            }
+            fn value_and_gradient(&self, x: &Point3<f64>) -> (f64, nalgebra::Vector3<f64>) {
+                self.1.fetch_add(1, Ordering::Relaxed);
+                self.0.value_and_gradient(x)
+            }
+        }
+        let mesh = load_obj("/work/shared/data/stanford-bunny.obj");
+        let mut normals = crate::mesh::normals::vertex_normals(&mesh);
+        let b = mesh.aabb().unwrap();
+        let diag = b.diagonal();
+        let spacing = (b.max - b.min).norm() / (mesh.positions.len() as f64).sqrt();
+        let t0 = Instant::now();
+        let (fill, fill_n) = hole_fill_points(&mesh, spacing);
+        eprintln!(
+            "bunny: {} holes filled with {} points",
+            mesh.topology().loops.len(),
+            fill.len()
+        );
+        let mut pts = mesh.positions.clone();
+        pts.extend(fill);
+        normals.extend(fill_n);
+        let imls = Imls::new(pts, normals, 0.8 * spacing);
+        eprintln!(
+            "bunny: {} points, diag {diag:.4}, sigma {:.2e}, tree {:?}",
+            mesh.positions.len(),
+            1.5 * spacing,
+            t0.elapsed()
+        );
+        let f = Counted(&imls, AtomicUsize::new(0));
+        for target in [1500, 3642] {
+            f.1.store(0, Ordering::Relaxed);
+            let t1 = Instant::now();
+            let (net, r) = fit_net(&f, &mesh.positions, &b, PatchSize::Count(target)).unwrap();
+            let net_evals = f.1.load(Ordering::Relaxed);
+            let t_net = t1.elapsed();
+            eprintln!(
+                "N={target}: {} patches (tries {:?}), h {:.3e}, chi {}, components {}, valences {:?}",
+                r.patches, r.patch_count.as_ref().map(|p| &p.tries), r.h, r.euler_characteristic, r.components, r.valence_histogram
+            );
+            eprintln!("   voxels {:?}", r.voxels);
+            eprintln!("   projected {:?}", r.smoothing.projected);
+            eprintln!(
+                "   smoothed ({} it) {:?}",
+                r.smoothing.iterations, r.smoothing.smoothed
+            );
+            eprintln!("   net: {net_evals} implicit evaluations, {t_net:?}");
+            f.1.store(0, Ordering::Relaxed);
+            let t2 = Instant::now();
+            let ps = sample_patches(&net, &f, &SampleOptions::new(1e-4 * diag, diag)).unwrap();
+            eprintln!(
+                "   samples: {:?}, {} evaluations, {:?}",
+                ps.report,
+                f.1.load(Ordering::Relaxed),
+                t2.elapsed()
+            );
+            // The stand-in implicit is rough (bumps at the point spacing, a degenerate patch
+            // where the filled holes meet the scan): require a closed genus-0 net, nearly no
+            // folds, every patch sampled, and the tolerance met on most patches.
+            assert_eq!(r.euler_characteristic, 2);
+            assert_eq!(r.components, 1);
+            assert!(r.smoothing.smoothed.flipped <= 2);
+            assert_eq!(ps.patches.len(), r.patches);
+            assert!(ps.report.p50_deviation <= 1e-3 * diag);
+        }
+    }
+}

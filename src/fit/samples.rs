@@ -14,7 +14,10 @@
 //! interval midpoints ([`super::spline_check`]; these splines are the patch's iso-curves through
 //! the sample rows) and at the cell centres (an estimate); where it exceeds the tolerance, raise the
 //! ribbon's count to S (dev / tol)^(1/4) x 1.1 (the error of cubic interpolation falls like the
-//! fourth power of the spacing), rebuild the patches touching changed ribbons, and repeat. A
+//! fourth power of the spacing), rebuild the patches touching changed ribbons, and repeat; a
+//! quad whose deviation fell by less than r^2 once its count rose by r >= 2 (r^4 is expected)
+//! is "stalled" and stops driving
+//! refinement (otherwise one unresolvable patch would push its whole ribbon to the cap). A
 //! ribbon takes the largest count any of its quads needs, so one curved spot densifies its whole
 //! strip: the price of a tensor-product network without T-junctions.
 //!
@@ -31,23 +34,28 @@
 //! [0, 1], which is the patch parameter along that side: they are derivatives of the patch with
 //! respect to its own parameter, as eq. 11's end conditions require.
 //!
-//! **Interior.** Transfinite (Coons) interpolation of the four boundary sample rows,
-//! P = (1-v) B(u) + v T(u) + (1-u) L(v) + u R(v) - bilinear(corners), each point then moved onto
-//! f = 0 along the Coons blend of the boundary normals (root of f on that line nearest the
-//! Coons point; Newton along the gradient if the line misses).
+//! **Interior.** Each interior row j is the section curve from its left boundary sample to its
+//! right one, sampled at S intervals with the edge machinery ([`super::edge_curve`]: a family of
+//! lines of the section plane, tracing as fallback), the plane chosen with the normal of the
+//! transfinite (Coons) patch of the four boundary rows at the row's middle. (Independent Coons
+//! points projected onto f = 0 were tried first: on patches wrapping the rim of a part thinner
+//! than a patch, like the bunny's ears, neighbouring points landed on different sides and the
+//! grid folded as it was refined.) If a row cannot be found, its points are the Coons points
+//! moved onto f = 0 along the Coons normal.
 //!
-//! **Cross-boundary derivatives.** d/dv on the row v = 0 is the Coons derivative
-//! (1-u) L'(0) + u R'(0) + T(u) - B(u) - [(1-u)(d - a) + u(c - b)], projected onto the
-//! implicit's tangent plane at the sample (normal from the edge data); at the corners it is
-//! exactly the along-side derivative of the adjacent side. Likewise on the other three sides.
-//! The two patches of an edge have different cross derivatives (each points into its own patch,
-//! with its own length), but both lie in the same tangent plane with the along-edge derivative,
-//! so the network is tangent-continuous (G1) at every boundary sample. Between samples the
-//! normal jump depends on the interpolation and is measured downstream (cad_check
-//! normal_jump_deg); at net vertices of valence != 4 one bicubic per quad cannot be G1 in
-//! general (Peters & Fan), so no twist compatibility is attempted here.
+//! **Cross-boundary derivatives.** d/du at the ends of interior rows is the row curve's own
+//! tangent (exact for that curve, in the implicit's tangent plane); at the corners it is the
+//! along-side derivative of the adjacent side. d/dv on the rows v = 0 and v = 1 is the one-sided
+//! difference (third order when T >= 3) of each column of samples, projected onto the implicit's tangent
+//! plane at the boundary sample (normal from the edge data). The two patches of an edge have
+//! different cross derivatives (each points into its own patch, with its own length), but both
+//! lie in the same tangent plane with the along-edge derivative, so the network is
+//! tangent-continuous (G1) at every boundary sample. Between samples the normal jump depends on
+//! the interpolation and is measured downstream (cad_check normal_jump_deg); at net vertices of
+//! valence != 4 one bicubic per quad cannot be G1 in general (Peters & Fan), so no twist
+//! compatibility is attempted here.
 
-use super::edge_curve::{sample_edge, EdgeSamples};
+use super::edge_curve::{sample_edge, sample_section, EdgeMethod, EdgeSamples};
 use super::ribbons::{ribbons, Ribbons};
 use super::spline_check::spline_midpoints;
 use crate::implicit::Implicit;
@@ -65,7 +73,8 @@ pub struct SampleOptions {
     pub tolerance: f64,
     /// Model size (bounding-box diagonal): root-finding tolerances are 1e-12 of it.
     pub scale: f64,
-    /// Fewest and most intervals per side.
+    /// Fewest and most intervals per side (defaults 2 and 16; the cap bounds the cost where
+    /// the tolerance cannot be met, e.g. an implicit wobbling at its own fit tolerance).
     pub min_intervals: usize,
     pub max_intervals: usize,
     /// Refinement rounds.
@@ -78,7 +87,7 @@ impl SampleOptions {
             tolerance,
             scale,
             min_intervals: 2,
-            max_intervals: 48,
+            max_intervals: 16,
             max_rounds: 6,
         }
     }
@@ -120,6 +129,12 @@ pub struct PatchSamples {
     pub deviation_v: f64,
     /// Estimated largest distance from f = 0 at the cell centres (see `build_patch`).
     pub deviation_cell: f64,
+    /// Interior samples that could not be moved onto f = 0 and were left at their Coons point
+    /// (0 unless the implicit misbehaves there).
+    pub unprojected: usize,
+    /// Largest |f| / |grad f| over the samples (about 1e-12 of the model size; larger where
+    /// the implicit jumps across zero and a sample sits on the jump).
+    pub max_residual: f64,
 }
 
 impl PatchSamples {
@@ -147,14 +162,31 @@ impl PatchSamples {
 pub struct SampleReport {
     pub rounds: usize,
     pub ribbons: usize,
-    /// Largest estimated deviation over all patches.
+    /// Largest estimated deviation over all patches, and the median and 95th percentile of the
+    /// per-patch deviations.
     pub max_deviation: f64,
+    pub p50_deviation: f64,
+    pub p95_deviation: f64,
     /// Patches whose estimated deviation exceeds the tolerance (at `max_intervals`).
     pub over_tolerance: usize,
     /// Total grid points over all patches, and distinct ones on edges.
     pub grid_points: usize,
     /// Histogram of ribbon interval counts: (count, ribbons).
     pub interval_histogram: Vec<(usize, usize)>,
+    /// Edges sampled on lines of their section plane / by tracing / by the projected-chord
+    /// last resort.
+    pub edges_on_lines: usize,
+    pub edges_traced: usize,
+    pub edges_projected_chord: usize,
+    /// Interior samples left off the surface (see [`PatchSamples::unprojected`]).
+    pub unprojected_samples: usize,
+    /// Largest |f| / |grad f| over all samples, and the patches with a sample farther than
+    /// 1e-9 of the model size from f = 0 (implicit defects: f jumping across zero).
+    pub max_sample_residual: f64,
+    pub patches_off_surface: usize,
+    /// Patches whose deviation fell by less than r^2 once their sample count rose by r >= 2:
+    /// they stopped driving refinement (patches wrapping a part thinner than themselves, implicit defects).
+    pub stalled: usize,
 }
 
 /// All patches with the shared edge data they were built from.
@@ -205,6 +237,10 @@ pub fn sample_patches<I: Implicit + ?Sized>(
     let mut patches: Vec<Option<PatchSamples>> = vec![None; net.quads.len()];
     let mut changed = vec![true; rib.count];
     let mut rounds = 0;
+    // Per quad and direction: the (count, deviation) of the first build, and whether the quad
+    // stopped improving (it then no longer drives refinement).
+    let mut first: Vec<[(usize, f64); 2]> = vec![[(0, f64::INFINITY); 2]; net.quads.len()];
+    let mut stalled = vec![[false; 2]; net.quads.len()];
     loop {
         rebuild(
             net,
@@ -228,7 +264,19 @@ pub fn sample_patches<I: Implicit + ?Sized>(
             let du = p.deviation_u.max(p.deviation_cell);
             let dv = p.deviation_v.max(p.deviation_cell);
             for (dir, dev, n) in [(0, du, p.s()), (1, dv, p.t())] {
-                if dev > opt.tolerance {
+                // Raised by r >= 2 since the first build: cubic interpolation should have cut
+                // the deviation by r^4; less than r^2 means the patch does not converge (a
+                // feature below the sample spacing, a jump of the implicit).
+                let (n0, d0) = first[q][dir];
+                if n0 == 0 {
+                    first[q][dir] = (n, dev);
+                } else if n >= 2 * n0 {
+                    let r = n as f64 / n0 as f64;
+                    if dev > d0 / (r * r) {
+                        stalled[q][dir] = true;
+                    }
+                }
+                if dev > opt.tolerance && !stalled[q][dir] {
                     let r = rib.of_quad[q][dir] as usize;
                     let want = (n as f64 * (dev / opt.tolerance).powf(0.25) * 1.1).ceil() as usize;
                     need[r] = need[r].max(want.max(n + 1).min(opt.max_intervals));
@@ -241,7 +289,8 @@ pub fn sample_patches<I: Implicit + ?Sized>(
             break;
         }
     }
-    finish(rib, intervals, edges, patches, opt, rounds)
+    let stalled = stalled.iter().filter(|s| s[0] || s[1]).count();
+    finish(rib, intervals, edges, patches, opt, rounds, stalled)
 }
 
 /// Re-samples the edges of the changed ribbons and the quads touching them.
@@ -302,6 +351,7 @@ fn finish(
     patches: Vec<Option<PatchSamples>>,
     opt: &SampleOptions,
     rounds: usize,
+    stalled: usize,
 ) -> Result<PatchSampling> {
     let edges: Vec<EdgeSamples> = edges
         .into_iter()
@@ -312,6 +362,8 @@ fn finish(
         .collect::<Option<_>>()
         .ok_or_else(|| Error::Numerical("a quad was left without samples".into()))?;
     let dev = |p: &PatchSamples| p.deviation();
+    let mut devs: Vec<f64> = patches.iter().map(dev).collect();
+    devs.sort_by(f64::total_cmp);
     let mut hist = std::collections::BTreeMap::new();
     for &n in &intervals {
         *hist.entry(n).or_insert(0usize) += 1;
@@ -320,9 +372,30 @@ fn finish(
         rounds,
         ribbons: rib.count,
         max_deviation: patches.iter().map(dev).fold(0.0, f64::max),
+        p50_deviation: quantile(&devs, 0.5),
+        p95_deviation: quantile(&devs, 0.95),
         over_tolerance: patches.iter().filter(|p| dev(p) > opt.tolerance).count(),
         grid_points: patches.iter().map(|p| (p.s() + 1) * (p.t() + 1)).sum(),
         interval_histogram: hist.into_iter().collect(),
+        edges_on_lines: edges
+            .iter()
+            .filter(|e| e.method == EdgeMethod::Lines)
+            .count(),
+        edges_traced: edges
+            .iter()
+            .filter(|e| e.method == EdgeMethod::Traced)
+            .count(),
+        edges_projected_chord: edges
+            .iter()
+            .filter(|e| e.method == EdgeMethod::ProjectedChord)
+            .count(),
+        unprojected_samples: patches.iter().map(|p| p.unprojected).sum(),
+        max_sample_residual: patches.iter().map(|p| p.max_residual).fold(0.0, f64::max),
+        patches_off_surface: patches
+            .iter()
+            .filter(|p| p.max_residual > 1e-9 * opt.scale)
+            .count(),
+        stalled,
     };
     Ok(PatchSampling {
         patches,
@@ -333,11 +406,13 @@ fn finish(
     })
 }
 
-/// One side's samples in the patch direction: points, along-side derivatives, normals.
+/// One side's samples in the patch direction: points, along-side derivatives, normals, and
+/// the section plane's in-plane normal.
 struct Side {
     p: Vec<Point3<f64>>,
     d: Vec<Vector3<f64>>,
     n: Vec<Vector3<f64>>,
+    w: Vector3<f64>,
 }
 
 fn side(e: &EdgeSamples, reversed: bool) -> Side {
@@ -346,18 +421,136 @@ fn side(e: &EdgeSamples, reversed: bool) -> Side {
             p: e.points.iter().rev().copied().collect(),
             d: e.tangents.iter().rev().map(|t| -t).collect(),
             n: e.normals.iter().rev().copied().collect(),
+            w: e.plane_w,
         }
     } else {
         Side {
             p: e.points.clone(),
             d: e.tangents.clone(),
             n: e.normals.clone(),
+            w: e.plane_w,
         }
     }
 }
 
 fn tangent_part(x: Vector3<f64>, n: &Vector3<f64>) -> Vector3<f64> {
     x - n * n.dot(&x)
+}
+
+/// The q-quantile of sorted values (nearest rank; 0 for none).
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    sorted[((sorted.len() - 1) as f64 * q).round() as usize]
+}
+
+/// Derivative at p[0] of the polynomial through p[0], p[1], ... at uniform steps `h`, of
+/// degree min(n, 3) (n the number of intervals available): one-sided differences of order up
+/// to three.
+fn one_sided_derivative(p: [Vector3<f64>; 4], n: usize, h: f64) -> Vector3<f64> {
+    match n {
+        0 => Vector3::zeros(),
+        1 => (p[1] - p[0]) / h,
+        2 => ((p[1] - p[0]) * 4.0 - (p[2] - p[0])) / (2.0 * h),
+        _ => ((p[1] - p[0]) * 18.0 - (p[2] - p[0]) * 9.0 + (p[3] - p[0]) * 2.0) / (6.0 * h),
+    }
+}
+
+/// An interior row: its points, d/du at its two ends, and how many points are off the surface.
+type Row = (Vec<Point3<f64>>, Vector3<f64>, Vector3<f64>, usize);
+
+/// The transfinite (Coons) patch of four boundary sample rows, for interior hints and the
+/// fallback: P = (1-v) B(u) + v T(u) + (1-u) L(v) + u R(v) - bilinear(corners).
+struct Coons<'a> {
+    bot: &'a Side,
+    top: &'a Side,
+    left: &'a Side,
+    right: &'a Side,
+    corners: [Point3<f64>; 4],
+}
+
+impl Coons<'_> {
+    /// Point at sample (i, j), parameters (u, v).
+    fn point(&self, i: usize, j: usize, u: f64, v: f64) -> Point3<f64> {
+        let [ca, cb, cc, cd] = self.corners.map(|p| p.coords);
+        Point3::from(
+            self.bot.p[i].coords * (1.0 - v)
+                + self.top.p[i].coords * v
+                + self.left.p[j].coords * (1.0 - u)
+                + self.right.p[j].coords * u
+                - (ca * ((1.0 - u) * (1.0 - v))
+                    + cb * (u * (1.0 - v))
+                    + cc * (u * v)
+                    + cd * ((1.0 - u) * v)),
+        )
+    }
+    /// Unit normal P_u x P_v at sample (i, j) (outward); the blend of the boundary normals where
+    /// that degenerates.
+    fn normal(&self, i: usize, j: usize, u: f64, v: f64) -> Vector3<f64> {
+        let [ca, cb, cc, cd] = self.corners;
+        let (b, t, l, r) = (self.bot, self.top, self.left, self.right);
+        let su = b.d[i] * (1.0 - v) + t.d[i] * v + (r.p[j] - l.p[j])
+            - ((cb - ca) * (1.0 - v) + (cc - cd) * v);
+        let sv = l.d[j] * (1.0 - u) + r.d[j] * u + (t.p[i] - b.p[i])
+            - ((cd - ca) * (1.0 - u) + (cc - cb) * u);
+        let s = b.n.len() - 1;
+        let blend = b.n[i] * (1.0 - v) + t.n[i] * v + l.n[j] * (1.0 - u) + r.n[j] * u
+            - (b.n[0] * ((1.0 - u) * (1.0 - v))
+                + b.n[s] * (u * (1.0 - v))
+                + t.n[s] * (u * v)
+                + t.n[0] * ((1.0 - u) * v));
+        su.cross(&sv)
+            .try_normalize(1e-12 * su.norm() * sv.norm())
+            .or_else(|| blend.try_normalize(1e-12))
+            .unwrap_or_else(Vector3::zeros)
+    }
+    /// Row j from Coons points moved onto f = 0 along the Coons normal (kept where that fails),
+    /// with the row's end derivatives from the Coons derivative; also the count of points left
+    /// off the surface.
+    fn row_fallback<I: Implicit + ?Sized>(
+        &self,
+        f: &I,
+        j: usize,
+        pu: &[f64],
+        v: f64,
+        tol: f64,
+        scale: f64,
+    ) -> Row {
+        let s = pu.len() - 1;
+        let [ca, cb, cc, cd] = self.corners;
+        let reach = (cc - ca).norm().max((cd - cb).norm());
+        let newton = NewtonOptions::new(scale, reach);
+        let mut missed = 0;
+        let row = (0..=s)
+            .map(|i| {
+                if i == 0 {
+                    return self.left.p[j];
+                }
+                if i == s {
+                    return self.right.p[j];
+                }
+                let x = self.point(i, j, pu[i], v);
+                let n = self.normal(i, j, pu[i], v);
+                if n.norm_squared() > 0.0 {
+                    if let Ok((sv, _)) = solve_on_line(f, x, n, reach, tol) {
+                        return x + n * sv;
+                    }
+                }
+                match project(f, x, &newton) {
+                    Ok((p, _)) => p,
+                    Err(_) => {
+                        missed += 1;
+                        x
+                    }
+                }
+            })
+            .collect();
+        let common = (self.right.p[j] - self.left.p[j]) - ((cb - ca) * (1.0 - v) + (cc - cd) * v);
+        let d0 = self.bot.d[0] * (1.0 - v) + self.top.d[0] * v + common;
+        let d1 = self.bot.d[s] * (1.0 - v) + self.top.d[s] * v + common;
+        (row, d0, d1, missed)
+    }
 }
 
 /// Builds the samples of quad `q` from the edge data.
@@ -409,8 +602,6 @@ fn build_patch<I: Implicit + ?Sized>(
     }
     let (pu, pv) = (uniform_params(s), uniform_params(t));
     let (ca, cb, cc, cd) = (bot.p[0], bot.p[s], top.p[s], top.p[0]);
-    // Coons interpolation of the boundary rows, then onto f = 0.
-    let newton = NewtonOptions::new(opt.scale, (cc - ca).norm().max((cd - cb).norm()));
     let tol = 1e-12 * opt.scale;
     let mut points = vec![vec![Point3::origin(); t + 1]; s + 1];
     for (i, col) in points.iter_mut().enumerate() {
@@ -419,81 +610,70 @@ fn build_patch<I: Implicit + ?Sized>(
     }
     points[0].copy_from_slice(&left.p);
     points[s].copy_from_slice(&right.p);
-    let interior: Vec<(usize, usize)> = (1..s).flat_map(|i| (1..t).map(move |j| (i, j))).collect();
-    let solved: Vec<Point3<f64>> = interior
-        .iter()
-        .map(|&(i, j)| {
-            let (u, v) = (pu[i], pv[j]);
-            let coons = |bu: Vector3<f64>,
-                         tu: Vector3<f64>,
-                         lv: Vector3<f64>,
-                         rv: Vector3<f64>,
-                         corners: [Vector3<f64>; 4]| {
-                bu * (1.0 - v) + tu * v + lv * (1.0 - u) + rv * u
-                    - (corners[0] * ((1.0 - u) * (1.0 - v))
-                        + corners[1] * (u * (1.0 - v))
-                        + corners[2] * (u * v)
-                        + corners[3] * ((1.0 - u) * v))
-            };
-            let x = Point3::from(coons(
-                bot.p[i].coords,
-                top.p[i].coords,
-                left.p[j].coords,
-                right.p[j].coords,
-                [ca.coords, cb.coords, cc.coords, cd.coords],
-            ));
-            let n = coons(
-                bot.n[i],
-                top.n[i],
-                left.n[j],
-                right.n[j],
-                [bot.n[0], bot.n[s], top.n[s], top.n[0]],
-            );
-            if let Some(n) = n.try_normalize(1e-12) {
-                if let Ok((sv, _)) = solve_on_line(f, x, n, newton.max_step, tol) {
-                    return Ok(x + n * sv);
-                }
+    // d/du at the ends of every row: the boundary edges' tangents at the corners, the row
+    // curves' own tangents in between.
+    let mut tan_u0 = vec![Vector3::zeros(); t + 1];
+    let mut tan_u1 = vec![Vector3::zeros(); t + 1];
+    (tan_u0[0], tan_u1[0], tan_u0[t], tan_u1[t]) = (bot.d[0], bot.d[s], top.d[0], top.d[s]);
+    // Interior rows: the section curve from the row's left sample to its right one (the edge
+    // machinery: lines, tracing), hinted by the Coons surface's normal at the row's middle.
+    // Where even that fails: Coons points moved onto f = 0 along the Coons normal.
+    let coons = Coons {
+        bot: &bot,
+        top: &top,
+        left: &left,
+        right: &right,
+        corners: [ca, cb, cc, cd],
+    };
+    let rows: Vec<Row> = (1..t)
+        .map(|j| {
+            // The plane normal blends the bottom and top edges' (rows 0 and T would be those
+            // edges exactly); where they disagree (a patch wrapping a rim along v), the Coons
+            // normal at the row's middle makes up the missing length.
+            let hint = coons.normal(s / 2, j, 0.5, pv[j]);
+            let blend = bot.w * (1.0 - pv[j]) + top.w * pv[j];
+            let w = blend + hint * (1.0 - blend.norm()).max(0.0);
+            match sample_section(f, left.p[j], right.p[j], w, s, tol) {
+                Ok(row) => (row.points, row.tangents[0], row.tangents[s], 0),
+                Err(_) => coons.row_fallback(f, j, &pu, pv[j], tol, opt.scale),
             }
-            project(f, x, &newton).map(|r| r.0)
         })
-        .collect::<Result<_>>()?;
-    for (&(i, j), p) in interior.iter().zip(solved) {
-        points[i][j] = p;
+        .collect();
+    let mut unprojected = 0;
+    for (j, (row, d0, d1, missed)) in (1..t).zip(rows) {
+        for i in 1..s {
+            points[i][j] = row[i];
+        }
+        tan_u0[j] = tangent_part(d0, &left.n[j]);
+        tan_u1[j] = tangent_part(d1, &right.n[j]);
+        unprojected += missed;
     }
-    // Cross-boundary derivatives: the Coons derivative, in the tangent plane.
+    // d/dv on the rows v = 0 and v = 1: the side edges' tangents at the corners; in between,
+    // the one-sided difference of each column, in the tangent plane.
+    let dv = pv[1] - pv[0];
+    let one_sided = |p: [Point3<f64>; 4]| {
+        one_sided_derivative([p[0].coords, p[1].coords, p[2].coords, p[3].coords], t, dv)
+    };
     let mut tan_v0 = Vec::with_capacity(s + 1);
     let mut tan_v1 = Vec::with_capacity(s + 1);
-    for (i, &u) in pu.iter().enumerate() {
-        let common = (top.p[i] - bot.p[i]) - ((cd - ca) * (1.0 - u) + (cc - cb) * u);
+    for (i, col) in points.iter().enumerate() {
         let (v0, v1) = if i == 0 {
             (left.d[0], left.d[t])
         } else if i == s {
             (right.d[0], right.d[t])
         } else {
+            let at = |k: usize| col[k.min(t)];
+            let from_top = |k: usize| col[t - k.min(t)];
             (
-                tangent_part(left.d[0] * (1.0 - u) + right.d[0] * u + common, &bot.n[i]),
-                tangent_part(left.d[t] * (1.0 - u) + right.d[t] * u + common, &top.n[i]),
+                tangent_part(one_sided([at(0), at(1), at(2), at(3)]), &bot.n[i]),
+                -tangent_part(
+                    one_sided([from_top(0), from_top(1), from_top(2), from_top(3)]),
+                    &top.n[i],
+                ),
             )
         };
         tan_v0.push(v0);
         tan_v1.push(v1);
-    }
-    let mut tan_u0 = Vec::with_capacity(t + 1);
-    let mut tan_u1 = Vec::with_capacity(t + 1);
-    for (j, &v) in pv.iter().enumerate() {
-        let common = (right.p[j] - left.p[j]) - ((cb - ca) * (1.0 - v) + (cc - cd) * v);
-        let (u0, u1) = if j == 0 {
-            (bot.d[0], bot.d[s])
-        } else if j == t {
-            (top.d[0], top.d[s])
-        } else {
-            (
-                tangent_part(bot.d[0] * (1.0 - v) + top.d[0] * v + common, &left.n[j]),
-                tangent_part(bot.d[s] * (1.0 - v) + top.d[s] * v + common, &right.n[j]),
-            )
-        };
-        tan_u0.push(u0);
-        tan_u1.push(u1);
     }
     // Tolerance estimate along rows (u), columns (v) and at cell centres.
     let dist = |p: &Vector3<f64>| {
@@ -513,6 +693,10 @@ fn build_patch<I: Implicit + ?Sized>(
         })
         .collect();
     let deviation_u = row_mids.iter().map(|r| max_dist(r)).fold(0.0, f64::max);
+    let max_residual = points
+        .iter()
+        .map(|col| max_dist(&col.iter().map(|p| p.coords).collect::<Vec<_>>()))
+        .fold(0.0, f64::max);
     let deviation_v = (0..=s)
         .map(|i| {
             let col: Vec<Vector3<f64>> = points[i].iter().map(|p| p.coords).collect();
@@ -521,11 +705,22 @@ fn build_patch<I: Implicit + ?Sized>(
         .fold(0.0, f64::max);
     // Cell centres: the v-spline through the row midpoints of each column of cells, with end
     // derivatives interpolated along u from tan_v0 / tan_v1 (end slopes of that interpolation,
-    // the twists, from one-sided differences). The tensor-product patch's value there depends
+    // the twists, from one-sided differences of order up to three). The tensor-product patch's value there depends
     // on how the interpolation treats twists, so this is an estimate.
-    let twist = |d: &[Vector3<f64>], k: usize| (d[k + 1] - d[k]) / (pu[k + 1] - pu[k]);
-    let v0_mid = spline_midpoints(&tan_v0, &pu, &twist(&tan_v0, 0), &twist(&tan_v0, s - 1));
-    let v1_mid = spline_midpoints(&tan_v1, &pu, &twist(&tan_v1, 0), &twist(&tan_v1, s - 1));
+    let du = pu[1] - pu[0];
+    let twist = |d: &[Vector3<f64>], from_end: bool| {
+        let at = |k: usize| {
+            if from_end {
+                d[s - k.min(s)]
+            } else {
+                d[k.min(s)]
+            }
+        };
+        let sign = if from_end { -1.0 } else { 1.0 };
+        sign * one_sided_derivative([at(0), at(1), at(2), at(3)], s, du)
+    };
+    let v0_mid = spline_midpoints(&tan_v0, &pu, &twist(&tan_v0, false), &twist(&tan_v0, true));
+    let v1_mid = spline_midpoints(&tan_v1, &pu, &twist(&tan_v1, false), &twist(&tan_v1, true));
     let deviation_cell = (0..s)
         .map(|i| {
             let col: Vec<Vector3<f64>> = row_mids.iter().map(|r| r[i]).collect();
@@ -546,6 +741,8 @@ fn build_patch<I: Implicit + ?Sized>(
         deviation_u,
         deviation_v,
         deviation_cell,
+        unprojected,
+        max_residual,
     })
 }
 

@@ -79,22 +79,33 @@ pub(crate) fn quad_shape(p: &[Point3<f64>; 4], n: &Vector3<f64>) -> QuadShape {
     }
 }
 
-/// Unit normals of f at the quad centres: each centroid projected onto f = 0 (steps capped at
-/// `h`), the normal of the nodes' mean when the projection fails.
+/// Unit normals of f at the quad centres. Where the unit normals at the four corners agree
+/// (each within about 45 degrees of their mean) the normalized mean serves, at no cost;
+/// otherwise (a quad wrapping a tight rim) the centroid is projected onto f = 0 (steps capped
+/// at `h`) and the gradient there is used.
 pub fn quad_normals<I: Implicit + ?Sized>(
     f: &I,
     net: &QuadNet,
+    node_normals: &[Vector3<f64>],
     scale: f64,
     h: f64,
 ) -> Vec<Vector3<f64>> {
     let opt = NewtonOptions {
         tol: 1e-9 * scale,
+        accept: 1e-6 * scale,
         max_step: h,
         max_iter: 20,
     };
     net.quads
         .par_iter()
         .map(|q| {
+            let ns = q.map(|i| node_normals[i as usize]);
+            let mean = (ns[0] + ns[1] + ns[2] + ns[3]).try_normalize(1e-12);
+            if let Some(m) = mean {
+                if ns.iter().all(|n| n.dot(&m) > 0.7) {
+                    return m;
+                }
+            }
             let c = Point3::from(
                 q.iter()
                     .map(|&i| net.nodes[i as usize].coords)
@@ -106,6 +117,18 @@ pub fn quad_normals<I: Implicit + ?Sized>(
                 Err(_) => f.gradient(&c),
             };
             g.try_normalize(0.0).unwrap_or_else(Vector3::zeros)
+        })
+        .collect()
+}
+
+/// Unit normals grad f / |grad f| at the nodes (zero where the gradient vanishes).
+pub fn node_normals<I: Implicit + ?Sized>(f: &I, nodes: &[Point3<f64>]) -> Vec<Vector3<f64>> {
+    nodes
+        .par_iter()
+        .map(|p| {
+            f.gradient(p)
+                .try_normalize(0.0)
+                .unwrap_or_else(Vector3::zeros)
         })
         .collect()
 }
@@ -172,7 +195,7 @@ pub fn quality_with(net: &QuadNet, quad_normals: &[Vector3<f64>], residuals: &[f
 /// Quality of `net` on the implicit `f`; `scale` is the model size (for tolerances), `h` the
 /// nominal edge length.
 pub fn net_quality<I: Implicit + ?Sized>(net: &QuadNet, f: &I, scale: f64, h: f64) -> NetQuality {
-    let n = quad_normals(f, net, scale, h);
+    let n = quad_normals(f, net, &node_normals(f, &net.nodes), scale, h);
     let r = node_residuals(f, &net.nodes);
     quality_with(net, &n, &r)
 }

@@ -86,18 +86,29 @@ pub fn project_and_smooth<I: Implicit + ?Sized>(
     }
     let newton = NewtonOptions::new(opt.scale, 0.5 * opt.h);
     let net_normals = net_normals(net);
-    net.nodes = project_on_lines(f, &net.nodes, &net_normals, 1.5 * opt.h, &newton)?;
-    let mut state = State::of(net, f, opt);
-    let projected = quality_with(net, &state.quad_n, &state.res);
+    let (nodes, normals) =
+        project_on_lines(f, &net.nodes, &net_normals, 1.5 * opt.h, &newton, None)?;
+    net.nodes = nodes;
+    let mut state = State::new(net, f, normals, opt);
+    let quality = |net: &QuadNet, st: &State| quality_with(net, &st.quad_n, &[0.0]);
+    let projected = quality(net, &state);
     let mut best = (projected, net.nodes.clone());
     let mut since = 0;
     let mut iterations = 0;
     for _ in 0..opt.max_iterations {
         iterations += 1;
         let moved = relax_step(net, &state.node_n, opt.step);
-        let proj = project_on_lines(f, &moved, &state.node_n, 0.5 * opt.h, &newton)?;
-        state = keep_unfolded(net, proj, &state, f, opt);
-        let q = quality_with(net, &state.quad_n, &state.res);
+        // A node that cannot be put back on the surface keeps its place.
+        let (proj, normals) = project_on_lines(
+            f,
+            &moved,
+            &state.node_n,
+            0.5 * opt.h,
+            &newton,
+            Some((&net.nodes, &state.node_n)),
+        )?;
+        state = keep_unfolded(net, proj, normals, &state, f, opt);
+        let q = quality(net, &state);
         if better(&q, &best.0) {
             let improved_min =
                 q.min_angle_deg > best.0.min_angle_deg + 1e-3 || score(&q).0 < score(&best.0).0;
@@ -111,35 +122,34 @@ pub fn project_and_smooth<I: Implicit + ?Sized>(
         }
     }
     net.nodes = best.1;
+    // Residuals of the kept nodes (the iterations do not need them).
+    let residuals = node_residuals(f, &net.nodes);
+    let fix = |mut q: NetQuality| {
+        q.max_residual = residuals.iter().fold(0.0, |a: f64, &b| a.max(b));
+        q
+    };
     Ok(SmoothReport {
-        projected,
-        smoothed: best.0,
+        projected: fix(projected),
+        smoothed: fix(best.0),
         iterations,
     })
 }
 
-/// Normals and residuals of the current nodes.
+/// Unit normals at the nodes and at the quad centres.
 struct State {
     node_n: Vec<Vector3<f64>>,
     quad_n: Vec<Vector3<f64>>,
-    res: Vec<f64>,
 }
 
 impl State {
-    fn of<I: Implicit + ?Sized>(net: &QuadNet, f: &I, opt: &SmoothOptions) -> State {
-        State {
-            node_n: net
-                .nodes
-                .par_iter()
-                .map(|p| {
-                    f.gradient(p)
-                        .try_normalize(0.0)
-                        .unwrap_or_else(Vector3::zeros)
-                })
-                .collect(),
-            quad_n: quad_normals(f, net, opt.scale, opt.h),
-            res: node_residuals(f, &net.nodes),
-        }
+    fn new<I: Implicit + ?Sized>(
+        net: &QuadNet,
+        f: &I,
+        node_n: Vec<Vector3<f64>>,
+        opt: &SmoothOptions,
+    ) -> State {
+        let quad_n = quad_normals(f, net, &node_n, opt.scale, opt.h);
+        State { node_n, quad_n }
     }
 }
 
@@ -159,27 +169,41 @@ fn net_normals(net: &QuadNet) -> Vec<Vector3<f64>> {
         .collect()
 }
 
+/// Node positions with their unit normals.
+type PointsAndNormals<'a> = (&'a [Point3<f64>], &'a [Vector3<f64>]);
+/// Projected positions and the unit normals there.
+type Projected = (Vec<Point3<f64>>, Vec<Vector3<f64>>);
+
 /// Each point moved onto f = 0 along its line x + s n (root nearest s = 0, |s| <= s_max);
-/// Newton along the gradient where the line misses the surface.
+/// Newton along the gradient where the line misses the surface. Returns the points and the unit
+/// normals there. Where both fail: the `fallback` point and normal when given, else an error.
 fn project_on_lines<I: Implicit + ?Sized>(
     f: &I,
     points: &[Point3<f64>],
     dirs: &[Vector3<f64>],
     s_max: f64,
     opt: &NewtonOptions,
-) -> Result<Vec<Point3<f64>>> {
-    points
-        .par_iter()
-        .zip(dirs.par_iter())
-        .map(|(p, n)| {
-            if n.norm_squared() > 0.0 {
-                if let Ok((s, _)) = solve_on_line(f, *p, *n, s_max, opt.tol) {
-                    return Ok(p + n * s);
-                }
+    fallback: Option<PointsAndNormals<'_>>,
+) -> Result<Projected> {
+    let out: Vec<(Point3<f64>, Vector3<f64>)> = (0..points.len())
+        .into_par_iter()
+        .map(|i| {
+            let (p, n) = (points[i], dirs[i]);
+            let solved = match (n.norm_squared() > 0.0)
+                .then(|| solve_on_line(f, p, n, s_max, opt.tol).ok())
+                .flatten()
+            {
+                Some((s, g)) => Ok((p + n * s, g)),
+                None => project(f, p, opt),
+            };
+            match (solved, fallback) {
+                (Ok((q, g)), _) => Ok((q, g.try_normalize(0.0).unwrap_or_else(Vector3::zeros))),
+                (Err(_), Some((pts, nrm))) => Ok((pts[i], nrm[i])),
+                (Err(e), None) => Err(e),
             }
-            project(f, *p, opt).map(|r| r.0)
         })
-        .collect()
+        .collect::<Result<_>>()?;
+    Ok(out.into_iter().unzip())
 }
 
 /// Tangential move of every node toward its relaxation target.
@@ -211,10 +235,11 @@ fn relax_step(net: &QuadNet, normals: &[Vector3<f64>], step: f64) -> Vec<Point3<
 }
 
 /// Moves the nodes to `new`, except those whose move folds (flips or degenerates) a quad that
-/// was fine before: they keep their old positions.
+/// was fine before: they keep their old positions and normals.
 fn keep_unfolded<I: Implicit + ?Sized>(
     net: &mut QuadNet,
     new: Vec<Point3<f64>>,
+    new_n: Vec<Vector3<f64>>,
     old: &State,
     f: &I,
     opt: &SmoothOptions,
@@ -230,7 +255,7 @@ fn keep_unfolded<I: Implicit + ?Sized>(
         .map(|(qi, q)| bad(&net.nodes, &old.quad_n, q, qi))
         .collect();
     let old_nodes = std::mem::replace(&mut net.nodes, new);
-    let mut state = State::of(net, f, opt);
+    let mut state = State::new(net, f, new_n, opt);
     for _ in 0..8 {
         let revert: Vec<usize> = net
             .quads
@@ -242,12 +267,14 @@ fn keep_unfolded<I: Implicit + ?Sized>(
         if revert.is_empty() {
             break;
         }
+        let mut node_n = state.node_n;
         for qi in revert {
             for &i in &net.quads[qi] {
                 net.nodes[i as usize] = old_nodes[i as usize];
+                node_n[i as usize] = old.node_n[i as usize];
             }
         }
-        state = State::of(net, f, opt);
+        state = State::new(net, f, node_n, opt);
     }
     state
 }

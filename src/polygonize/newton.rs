@@ -8,7 +8,8 @@
 //!   with a bracketing fallback (Illinois regula falsi) when Newton leaves the neighbourhood.
 //!
 //! Both stop when the first-order distance |f| / |grad f| is below `tol` and return the gradient
-//! at the final point (the surface normal, up to length). Steps are capped at `max_step` and
+//! at the final point (the surface normal, up to length); a stalled iteration is accepted when
+//! within `accept` (an implicit evaluated with round-off noise cannot always reach `tol`). Steps are capped at `max_step` and
 //! halved while |f| grows, so a start a voxel away from the surface cannot jump to another sheet.
 //! Hand-written because the iteration is five lines; the implicit engineer's `implicit/project.rs`
 //! can replace [`project`] once merged.
@@ -22,6 +23,9 @@ use nalgebra::{Point3, Vector3};
 pub struct NewtonOptions {
     /// Stop when |f| / |grad f| <= tol (a length).
     pub tol: f64,
+    /// When the iteration stalls (an implicit with noise or tiny jumps below `tol`), accept the
+    /// iterate if |f| / |grad f| <= accept; otherwise fail.
+    pub accept: f64,
     /// Longest single step (a length).
     pub max_step: f64,
     /// Iteration cap.
@@ -33,6 +37,7 @@ impl NewtonOptions {
     pub fn new(scale: f64, max_step: f64) -> Self {
         NewtonOptions {
             tol: 1e-12 * scale,
+            accept: 1e-9 * scale,
             max_step,
             max_iter: 60,
         }
@@ -82,7 +87,7 @@ pub fn project<I: Implicit + ?Sized>(
             break;
         }
     }
-    if v.is_finite() && finite_vec(&g) && v.abs() <= opt.tol * g.norm() {
+    if v.is_finite() && finite_vec(&g) && v.abs() <= opt.accept.max(opt.tol) * g.norm() {
         return Ok((p, g));
     }
     Err(Error::Numerical(format!(
@@ -92,7 +97,9 @@ pub fn project<I: Implicit + ?Sized>(
 }
 
 /// Root of f(o + s w) = 0 for s in [-s_max, s_max], the one nearest s = 0 when Newton from 0
-/// fails. `w` need not be unit; `tol` applies to |f| / |grad f|. Returns (s, grad f).
+/// fails. `w` need not be unit; `tol` applies to |f| / |grad f| (a stalled Newton iterate within
+/// 1000 tol is accepted; where f jumps across zero, the located sign change is returned even
+/// though |f| is not small there). Returns (s, grad f).
 pub fn solve_on_line<I: Implicit + ?Sized>(
     f: &I,
     o: Point3<f64>,
@@ -135,6 +142,10 @@ pub fn solve_on_line<I: Implicit + ?Sized>(
             break;
         }
     }
+    // Stalled close enough (noise below tol): accept within 1000 tol.
+    if v.is_finite() && v.abs() <= 1e3 * tol * g.norm() {
+        return Ok((s, g));
+    }
     // Fallback: nearest sign change on a grid of 32 steps each way, then Illinois.
     let v0 = at(0.0).0;
     let n = 32;
@@ -165,7 +176,13 @@ pub fn solve_on_line<I: Implicit + ?Sized>(
         if !fc.is_finite() {
             break;
         }
-        if fc.abs() <= tol * gc.norm() || (b - a).abs() <= 1e-15 * s_max {
+        if fc.abs() <= tol * gc.norm() {
+            return Ok((c, gc));
+        }
+        if (b - a).abs() <= 1e-15 * s_max {
+            // The bracket closed: f changes sign here. If |f| is not small, f jumps across
+            // zero (a defect of the implicit); the sign change is still where its zero set
+            // is, so it is returned and callers measure |f| / |grad f| to report it.
             return Ok((c, gc));
         }
         if (fc <= 0.0) == (fb <= 0.0) {

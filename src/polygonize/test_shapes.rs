@@ -171,6 +171,171 @@ impl Implicit for Blob {
     }
 }
 
+/// A smooth implicit from oriented points (IMLS, Kolluri 2005): f(x) = sum w_i n_i . (x - p_i) /
+/// sum w_i with compactly supported weights w_i = (1 - |x - p_i|^2 / R^2)^4, R = 3 sigma, plus a positive bias c sigma (1 - W / W_ref)^2 where the weight sum W falls below
+/// W_ref (sparse data: holes), so the zero set closes over holes. Far from every point it is
+/// the distance to the nearest point. Test-only stand-in for the real implicit.
+pub struct Imls {
+    tree: kiddo::ImmutableKdTree<f64, 3>,
+    pts: Vec<Point3<f64>>,
+    nrm: Vec<Vector3<f64>>,
+    sigma: f64,
+    w_ref: f64,
+}
+
+impl Imls {
+    pub fn new(pts: Vec<Point3<f64>>, nrm: Vec<Vector3<f64>>, sigma: f64) -> Imls {
+        // Points without a usable normal (unreferenced vertices) are left out.
+        let (pts, nrm): (Vec<_>, Vec<_>) = pts
+            .into_iter()
+            .zip(nrm)
+            .filter(|(_, n)| n.iter().all(|x| x.is_finite()) && n.norm() > 0.5)
+            .unzip();
+        let entries: Vec<[f64; 3]> = pts.iter().map(|p| [p.x, p.y, p.z]).collect();
+        let tree = kiddo::ImmutableKdTree::new_from_slice(&entries).unwrap();
+        let mut f = Imls {
+            tree,
+            pts,
+            nrm,
+            sigma,
+            w_ref: 1.0,
+        };
+        let mut ws: Vec<f64> = (0..f.pts.len())
+            .step_by(97)
+            .map(|i| f.weights(&f.pts[i]).2)
+            .collect();
+        ws.sort_by(f64::total_cmp);
+        f.w_ref = 0.3 * ws[ws.len() / 2];
+        f
+    }
+    /// (A, grad A, W, grad W) of the weighted sums.
+    fn weights(&self, x: &Point3<f64>) -> (f64, Vector3<f64>, f64, Vector3<f64>) {
+        let r2 = 9.0 * self.sigma * self.sigma;
+        let found = self
+            .tree
+            .query(&[x.x, x.y, x.z])
+            .within::<kiddo::SquaredEuclidean<f64>>(r2)
+            .unsorted()
+            .execute();
+        let (mut a, mut ga, mut w, mut gw) = (0.0, Vector3::zeros(), 0.0, Vector3::zeros());
+        for r in found {
+            let i = r.item as usize;
+            let d = x - self.pts[i];
+            let q = 1.0 - d.norm_squared() / r2;
+            if q <= 0.0 {
+                continue;
+            }
+            let phi = q.powi(4);
+            let dphi = d * (-8.0 / r2 * q.powi(3));
+            let plane = self.nrm[i].dot(&d);
+            a += phi * plane;
+            ga += dphi * plane + self.nrm[i] * phi;
+            w += phi;
+            gw += dphi;
+        }
+        (a, ga, w, gw)
+    }
+}
+
+impl Implicit for Imls {
+    fn value(&self, x: &Point3<f64>) -> f64 {
+        self.value_and_gradient(x).0
+    }
+    fn gradient(&self, x: &Point3<f64>) -> Vector3<f64> {
+        self.value_and_gradient(x).1
+    }
+    fn value_and_gradient(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+        let near = self
+            .tree
+            .query(&[x.x, x.y, x.z])
+            .nearest_one::<kiddo::SquaredEuclidean<f64>>()
+            .execute();
+        let i = near.item as usize;
+        let (a, ga, w, gw) = self.weights(x);
+        let e = 1e-3 * self.w_ref;
+        let f_near = self.nrm[i].dot(&(x - self.pts[i]));
+        // f = (A + e F_near) / (W + e), since W F = A.
+        let den = w + e;
+        let f = (a + e * f_near) / den;
+        let g = (ga + self.nrm[i] * e - gw * f) / den;
+        (f, g)
+    }
+}
+
+/// Closes the boundary loops of a mesh with fans around each loop's centroid, sampled at about
+/// `spacing`, and returns the extra points with their normals (consistent with the mesh's
+/// orientation).
+pub fn hole_fill_points(m: &crate::Mesh, spacing: f64) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>) {
+    let topo = m.topology();
+    let (mut pts, mut nrm) = (Vec::new(), Vec::new());
+    for lp in &topo.loops {
+        let v: Vec<Point3<f64>> = lp
+            .vertices
+            .iter()
+            .map(|&i| m.positions[i as usize])
+            .collect();
+        let c = Point3::from(v.iter().map(|p| p.coords).sum::<Vector3<f64>>() / v.len() as f64);
+        for k in 0..v.len() {
+            let (p, q) = (v[k], v[(k + 1) % v.len()]);
+            // Faces walk p -> q; the fan face walks q -> p -> c.
+            let n = (p - q).cross(&(c - q));
+            let Some(n) = n.try_normalize(1e-300) else {
+                continue;
+            };
+            let steps = (((c - p).norm().max((c - q).norm())) / spacing)
+                .ceil()
+                .max(1.0) as usize;
+            for a in 0..=steps {
+                for b in 0..=steps - a {
+                    if a + b == 0 {
+                        continue; // the centre, added once below
+                    }
+                    let (sa, sb) = (a as f64 / steps as f64, b as f64 / steps as f64);
+                    if sa + sb >= 1.0 {
+                        continue; // on the loop itself: mesh vertices are there
+                    }
+                    pts.push(c + (p - c) * sa + (q - c) * sb);
+                    nrm.push(n);
+                }
+            }
+        }
+        let n: Vector3<f64> = (0..v.len())
+            .map(|k| (v[k] - v[(k + 1) % v.len()]).cross(&(c - v[(k + 1) % v.len()])))
+            .sum();
+        if let Some(n) = n.try_normalize(1e-300) {
+            pts.push(c);
+            nrm.push(n);
+        }
+    }
+    (pts, nrm)
+}
+
+/// Vertices and triangles of a simple OBJ (`v x y z`, `f a b c` with 1-based indices, `a/b/c`
+/// forms allowed).
+pub fn load_obj(path: &str) -> crate::Mesh {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut m = crate::Mesh::default();
+    for line in text.lines() {
+        let mut it = line.split_whitespace();
+        match it.next() {
+            Some("v") => {
+                let v: Vec<f64> = it.take(3).map(|x| x.parse().unwrap()).collect();
+                m.positions.push(Point3::new(v[0], v[1], v[2]));
+            }
+            Some("f") => {
+                let v: Vec<u32> = it
+                    .map(|x| x.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
+                    .collect();
+                for k in 1..v.len() - 1 {
+                    m.faces.push([v[0], v[k], v[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    m
+}
+
 /// `n` points on the zero set, found by projecting a Fibonacci sphere of radius `rad` around
 /// `c` along the gradient.
 pub fn seeds_on<I: Implicit + ?Sized>(
