@@ -301,7 +301,26 @@ fn projected_chord<I: Implicit + ?Sized>(
         } else if k == n {
             (b, gb)
         } else {
-            crate::polygonize::newton::project(f, a + e * (k as f64 / n as f64), &opt)?
+            let x = a + e * (k as f64 / n as f64);
+            match crate::polygonize::newton::project(f, x, &opt) {
+                Ok(r) => r,
+                // Where Newton along the gradient wanders (a plateau or a jump of the
+                // implicit), the root on the line along the mean end normal; failing that the
+                // chord point itself, left off the surface: the edge stays shared by both
+                // patches (watertight) and its residual shows in the sampling report.
+                Err(_) => {
+                    let w = ga.normalize() + gb.normalize();
+                    let w = if w.norm() > 1e-9 {
+                        w.normalize()
+                    } else {
+                        ga.normalize()
+                    };
+                    match solve_on_line(f, x, w, 0.5 * e.norm(), tol) {
+                        Ok((s, g)) => (x + w * s, g),
+                        Err(_) => (x, w),
+                    }
+                }
+            }
         };
         let nn =
             unit(g).ok_or_else(|| Error::Numerical("the implicit's gradient vanishes".into()))?;

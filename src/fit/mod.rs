@@ -5,11 +5,14 @@
 //! - [`net`]: the quad net stage (voxel size from the patch count, voxel net, projection and
 //!   smoothing) in one call;
 //! - [`ribbons`]: quad strips (ribbons) of edges that must share one sample count;
+//! - [`cross_tangents`]: cross-boundary derivatives made coplanar with the interpolated boundary
+//!   curve, for equal normals on both sides at every boundary sample;
 //! - [`edge_curve`]: the samples and tangents of one net edge, from that edge's data alone;
 //! - [`spline_check`]: the complete cubic spline a row of samples will become, for the
 //!   tolerance test;
 //! - [`samples`]: the per-patch grids, their counts chosen from `--tolerance`.
 
+pub mod cross_tangents;
 pub mod edge_curve;
 pub mod net;
 pub mod pipeline;

@@ -41,6 +41,37 @@ pub struct NetReport {
     pub patch_count: Option<PatchCountReport>,
     /// Quality right after projection and after smoothing.
     pub smoothing: SmoothReport,
+    /// The grid placements tried (the kept one has the fewest folds).
+    pub placements: Vec<PlacementTry>,
+}
+
+/// One placement of the voxel grid tried by [`fit_net`].
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PlacementTry {
+    /// Shift of the grid along its diagonal, in voxels.
+    pub shift: f64,
+    pub patches: usize,
+    /// Flipped or degenerate quads after smoothing.
+    pub folded_quads: usize,
+    /// Net edges whose end nodes' surface normals point apart (dot < 0).
+    pub crossing_edges: usize,
+}
+
+/// Net edges whose two end nodes have opposed unit normals of f: the net crosses a sheet
+/// thinner than a voxel there (or wraps its rim).
+fn crossing_edges<I: Implicit + ?Sized>(f: &I, net: &QuadNet) -> usize {
+    let n: Vec<_> = net
+        .nodes
+        .iter()
+        .map(|p| f.gradient(p).try_normalize(0.0))
+        .collect();
+    net.edges
+        .iter()
+        .filter(|e| match (n[e[0] as usize], n[e[1] as usize]) {
+            (Some(a), Some(b)) => a.dot(&b) < 0.0,
+            _ => false,
+        })
+        .count()
 }
 
 /// Builds, projects and smooths the quad net of f = 0 near `seeds` (points on or near the
@@ -76,8 +107,61 @@ pub fn fit_net<I: Implicit + ?Sized>(
         }
     };
     let h = voxel_net.h;
-    let mut net = voxel_net.net;
-    let smoothing = project_and_smooth(&mut net, f, &SmoothOptions::new(scale, h))?;
+    // Grid placements: the voxel grid shifted by 0, 1/3 and 2/3 of a voxel along the diagonal.
+    // Where the surface is thinner than a voxel (the bunny's ears at 1,500 patches), whether
+    // the net wraps the sheet cleanly or folds through it depends on how the grid happens to
+    // cut it; each placement is projected and smoothed, and the one with the fewest folds
+    // (flipped or degenerate quads first, then net edges whose end nodes' surface normals point
+    // apart, which is where the net crosses a thin sheet) is kept. Ties keep the earliest, so
+    // the choice is deterministic.
+    let target = match size {
+        PatchSize::Count(n) => Some(n as f64),
+        PatchSize::Edge(_) => None,
+    };
+    let mut candidates: Vec<PlacementTry> = Vec::new();
+    let mut best: Option<(usize, QuadNet, SmoothReport, VoxelNetStats)> = None;
+    for (k, frac) in [0.0, 1.0 / 3.0, 2.0 / 3.0].into_iter().enumerate() {
+        let (mut net, stats) = if k == 0 {
+            (voxel_net.net.clone(), voxel_net.stats.clone())
+        } else {
+            let shift = nalgebra::Vector3::repeat(frac * h);
+            let shifted = Aabb {
+                min: bounds.min - shift,
+                max: bounds.max,
+            };
+            match build_voxel_net(f, seeds, &shifted, &VoxelNetOptions::new(h)) {
+                Ok(v) => (v.net, v.stats),
+                Err(_) => continue,
+            }
+        };
+        // The first placement is the one the patch count was tuned on; shifted ones must
+        // stay within its 15 % window.
+        if let (Some(n), true) = (target, k > 0) {
+            if (net.quads.len() as f64 - n).abs() > 0.15 * n {
+                continue;
+            }
+        }
+        let Ok(smoothing) = project_and_smooth(&mut net, f, &SmoothOptions::new(scale, h)) else {
+            continue;
+        };
+        let folds = smoothing.smoothed.flipped + smoothing.smoothed.degenerate;
+        let crossing = crossing_edges(f, &net);
+        let score = 1000 * folds + crossing;
+        candidates.push(PlacementTry {
+            shift: frac,
+            patches: net.quads.len(),
+            folded_quads: folds,
+            crossing_edges: crossing,
+        });
+        if best.as_ref().is_none_or(|b| score < b.0) {
+            best = Some((score, net, smoothing, stats));
+        }
+    }
+    let Some((_, net, smoothing, voxel_stats)) = best else {
+        return Err(Error::Numerical(
+            "the quad net could not be projected onto the surface".into(),
+        ));
+    };
     let report = NetReport {
         h,
         patches: net.quads.len(),
@@ -86,7 +170,8 @@ pub fn fit_net<I: Implicit + ?Sized>(
         euler_characteristic: net.euler_characteristic(),
         components: net.components().1,
         valence_histogram: net.valence_histogram(),
-        voxels: voxel_net.stats,
+        voxels: voxel_stats,
+        placements: candidates,
         patch_count,
         smoothing,
     };

@@ -4,6 +4,7 @@
 //! tangents (eq. 9-14) -> a sewn patch network, measured: deviation of the input points from the
 //! patches by point inversion, normal jump across shared edges, quad quality, timings.
 
+use super::cross_tangents::{align_cross_derivatives, corner_twists};
 use super::net::{fit_net, NetReport, PatchSize};
 use super::samples::{sample_patches, SampleOptions, SampleReport};
 use crate::implicit::pou::{FitOptions as ImplicitOptions, FitStats, PouImplicit};
@@ -129,19 +130,19 @@ pub fn fit(
         .patches
         .par_iter()
         .map(|s| {
-            let grid = PatchGrid {
-                points: s.points.clone(),
-                du_u0: s.tan_u0.clone(),
-                du_u1: s.tan_u1.clone(),
-                dv_v0: s.tan_v0.clone(),
-                dv_v1: s.tan_v1.clone(),
+            let mut s = s.clone();
+            align_cross_derivatives(&mut s, &sampling.edges)?;
+            let (pu, pv) = (Params::new(&s.params_u)?, Params::new(&s.params_v)?);
+            let mut grid = PatchGrid {
+                points: s.points,
+                du_u0: s.tan_u0,
+                du_u1: s.tan_u1,
+                dv_v0: s.tan_v0,
+                dv_v1: s.tan_v1,
                 twist: Twist::Estimate,
             };
-            let surface = BSplineSurface::interpolate_grid(
-                &grid,
-                &Params::new(&s.params_u)?,
-                &Params::new(&s.params_v)?,
-            )?;
+            grid.twist = Twist::Given(corner_twists(&f, &grid, &pu, &pv)?);
+            let surface = BSplineSurface::interpolate_grid(&grid, &pu, &pv)?;
             Ok(PatchInput {
                 surface,
                 corners: s.corners,

@@ -79,6 +79,10 @@ pub struct SampleOptions {
     pub max_intervals: usize,
     /// Refinement rounds.
     pub max_rounds: usize,
+    /// Largest turning of the surface normal between consecutive samples of an edge, degrees
+    /// (default 30): sides whose normals turn faster are refined, for continuity rather than
+    /// position.
+    pub max_turn_deg: f64,
 }
 
 impl SampleOptions {
@@ -89,6 +93,7 @@ impl SampleOptions {
             min_intervals: 2,
             max_intervals: 16,
             max_rounds: 6,
+            max_turn_deg: 30.0,
         }
     }
 }
@@ -281,6 +286,23 @@ pub fn sample_patches<I: Implicit + ?Sized>(
                     let want = (n as f64 * (dev / opt.tolerance).powf(0.25) * 1.1).ceil() as usize;
                     need[r] = need[r].max(want.max(n + 1).min(opt.max_intervals));
                 }
+            }
+        }
+        // Normals turning fast between samples (a rounded crease, a thin rim): the normal jump
+        // between two patches grows with the turning per interval, so a ribbon whose edges
+        // turn by more than `max_turn_deg` per interval is refined in proportion.
+        for (e, es) in edges.iter().enumerate() {
+            let Some(es) = es else { continue };
+            let turn = es
+                .normals
+                .windows(2)
+                .map(|w| w[0].angle(&w[1]).to_degrees())
+                .fold(0.0, f64::max);
+            if turn > opt.max_turn_deg {
+                let r = rib.of_edge[e] as usize;
+                let n = es.intervals();
+                let want = (n as f64 * turn / opt.max_turn_deg).ceil() as usize;
+                need[r] = need[r].max(want.max(n + 1).min(opt.max_intervals));
             }
         }
         changed = need.iter().zip(&intervals).map(|(a, b)| a != b).collect();

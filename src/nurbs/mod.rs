@@ -17,4 +17,7 @@ pub mod tessellate;
 pub use curve::BSplineCurve;
 pub use network::{NetEdge, NetFace, PatchInput, PatchNetwork};
 pub use params::Params;
-pub use surface::{BSplineSurface, ClosestPoint, PatchGrid, Side, SurfaceDerivatives, Twist};
+pub use surface::{
+    end_slope, estimate_twists, BSplineSurface, ClosestPoint, PatchGrid, Side, SurfaceDerivatives,
+    Twist,
+};

@@ -465,7 +465,7 @@ impl BSplineSurface {
 
 /// d/dt at t_0 = 0 (or at t_n = 1 when `at_end`) of samples f_k at parameters t_k: the
 /// derivative of the parabola through the three end samples, or the chord slope with two.
-fn end_slope(f: &[Vector3<f64>], t: &[f64], at_end: bool) -> Vector3<f64> {
+pub fn end_slope(f: &[Vector3<f64>], t: &[f64], at_end: bool) -> Vector3<f64> {
     let n = f.len();
     // Work from the chosen end inward, with signed steps.
     let (i0, i1, i2) = if at_end {
@@ -483,8 +483,9 @@ fn end_slope(f: &[Vector3<f64>], t: &[f64], at_end: bool) -> Vector3<f64> {
         - f[i2] * (h1 / (h2 * (h2 - h1)))
 }
 
-/// Corner twists estimated from the boundary tangents ([`Twist::Estimate`]).
-fn estimate_twists(grid: &PatchGrid, u: &Params, v: &Params) -> [Vector3<f64>; 4] {
+/// Corner twists estimated from the boundary tangents ([`Twist::Estimate`]), in the corner
+/// order of [`Twist::Given`].
+pub fn estimate_twists(grid: &PatchGrid, u: &Params, v: &Params) -> [Vector3<f64>; 4] {
     let (us, vs) = (u.as_slice(), v.as_slice());
     let c = |along_u: &[Vector3<f64>], u_end: bool, along_v: &[Vector3<f64>], v_end: bool| {
         (end_slope(along_u, us, u_end) + end_slope(along_v, vs, v_end)) * 0.5

@@ -20,7 +20,7 @@
 //! flipped + degenerate quads, then the largest minimum angle, then the largest mean) is kept.
 
 use super::net_quality::{node_residuals, quad_normals, quad_shape, quality_with, NetQuality};
-use super::newton::{project, solve_on_line, NewtonOptions};
+use super::newton::{project, solve_on_line_facing, NewtonOptions};
 use super::quad_net::QuadNet;
 use crate::implicit::Implicit;
 use crate::{Error, Result};
@@ -174,7 +174,9 @@ type PointsAndNormals<'a> = (&'a [Point3<f64>], &'a [Vector3<f64>]);
 /// Projected positions and the unit normals there.
 type Projected = (Vec<Point3<f64>>, Vec<Vector3<f64>>);
 
-/// Each point moved onto f = 0 along its line x + s n (root nearest s = 0, |s| <= s_max);
+/// Each point moved onto f = 0 along its line x + s n (the root nearest s = 0 where f grows
+/// along n, so a node stays on the sheet its outward normal n faces: on a plate thinner than a
+/// voxel both sheets lie within reach; |s| <= s_max);
 /// Newton along the gradient where the line misses the surface. Returns the points and the unit
 /// normals there. Where both fail: the `fallback` point and normal when given, else an error.
 fn project_on_lines<I: Implicit + ?Sized>(
@@ -190,7 +192,7 @@ fn project_on_lines<I: Implicit + ?Sized>(
         .map(|i| {
             let (p, n) = (points[i], dirs[i]);
             let solved = match (n.norm_squared() > 0.0)
-                .then(|| solve_on_line(f, p, n, s_max, opt.tol).ok())
+                .then(|| solve_on_line_facing(f, p, n, s_max, opt.tol).ok())
                 .flatten()
             {
                 Some((s, g)) => Ok((p + n * s, g)),

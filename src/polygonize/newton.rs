@@ -163,12 +163,81 @@ pub fn solve_on_line<I: Implicit + ?Sized>(
             }
         }
     }
-    let Some((mut a, mut fa, mut b, mut fb)) = bracket else {
+    let Some((a, fa, b, fb)) = bracket else {
         return Err(Error::Numerical(format!(
             "no surface point on the line through ({:.6}, {:.6}, {:.6}) within {s_max:.3e}",
             o.x, o.y, o.z
         )));
     };
+    refine_bracket(&at, (a, fa), (b, fb), s_max, tol).ok_or_else(|| {
+        Error::Numerical(format!(
+            "root finding on the line through ({:.6}, {:.6}, {:.6}) did not converge",
+            o.x, o.y, o.z
+        ))
+    })
+}
+
+/// Root of f(o + s w) = 0 nearest s = 0 in [-s_max, s_max] at which f *increases* along w
+/// (grad f . w > 0): the surface crossed from inside to outside when walking along w. On a
+/// sheet thinner than the search window (a plate, a thin ear) a line meets two roots of
+/// opposite orientation; a net node whose outward direction is w belongs on this one. Newton
+/// from s = 0 is tried first and kept when its root faces w; otherwise the line is scanned in
+/// 64 steps each way for the nearest such bracket.
+pub fn solve_on_line_facing<I: Implicit + ?Sized>(
+    f: &I,
+    o: Point3<f64>,
+    w: Vector3<f64>,
+    s_max: f64,
+    tol: f64,
+) -> Result<(f64, Vector3<f64>)> {
+    if let Ok((s, g)) = solve_on_line(f, o, w, s_max, tol) {
+        if g.dot(&w) > 0.0 {
+            return Ok((s, g));
+        }
+    }
+    let at = |s: f64| f.value_and_gradient(&(o + w * s));
+    let n = 64;
+    let value = |s: f64| at(s).0;
+    let step = s_max / n as f64;
+    let mut best: Option<(f64, f64, f64, f64)> = None;
+    // Intervals [k, k+1] step by step outward from 0 in both directions, nearest first.
+    'scan: for k in 0..n {
+        for dir in [1.0, -1.0] {
+            let (p, q) = if dir > 0.0 {
+                (k as f64 * step, (k + 1) as f64 * step)
+            } else {
+                (-((k + 1) as f64) * step, -(k as f64) * step)
+            };
+            let (fp, fq) = (value(p), value(q));
+            if fp.is_finite() && fq.is_finite() && fp <= 0.0 && fq > 0.0 {
+                best = Some((p, fp, q, fq));
+                break 'scan;
+            }
+        }
+    }
+    let Some((a, fa, b, fb)) = best else {
+        return Err(Error::Numerical(format!(
+            "no outward-facing surface point on the line through ({:.6}, {:.6}, {:.6}) within {s_max:.3e}",
+            o.x, o.y, o.z
+        )));
+    };
+    refine_bracket(&at, (a, fa), (b, fb), s_max, tol).ok_or_else(|| {
+        Error::Numerical(format!(
+            "root finding on the line through ({:.6}, {:.6}, {:.6}) did not converge",
+            o.x, o.y, o.z
+        ))
+    })
+}
+
+/// Illinois (modified regula falsi) on a bracket (a, f(a)), (b, f(b)) of opposite signs.
+/// Returns (s, grad f) at the root, or None when the iteration fails.
+fn refine_bracket(
+    at: &dyn Fn(f64) -> (f64, Vector3<f64>),
+    (mut a, mut fa): (f64, f64),
+    (mut b, mut fb): (f64, f64),
+    s_max: f64,
+    tol: f64,
+) -> Option<(f64, Vector3<f64>)> {
     let mut side = 0i8;
     for _ in 0..200 {
         let c = (a * fb - b * fa) / (fb - fa);
@@ -177,13 +246,13 @@ pub fn solve_on_line<I: Implicit + ?Sized>(
             break;
         }
         if fc.abs() <= tol * gc.norm() {
-            return Ok((c, gc));
+            return Some((c, gc));
         }
         if (b - a).abs() <= 1e-15 * s_max {
             // The bracket closed: f changes sign here. If |f| is not small, f jumps across
             // zero (a defect of the implicit); the sign change is still where its zero set
             // is, so it is returned and callers measure |f| / |grad f| to report it.
-            return Ok((c, gc));
+            return Some((c, gc));
         }
         if (fc <= 0.0) == (fb <= 0.0) {
             b = c;
@@ -201,10 +270,7 @@ pub fn solve_on_line<I: Implicit + ?Sized>(
             side = -1;
         }
     }
-    Err(Error::Numerical(format!(
-        "root finding on the line through ({:.6}, {:.6}, {:.6}) did not converge",
-        o.x, o.y, o.z
-    )))
+    None
 }
 
 #[cfg(test)]

@@ -37,13 +37,33 @@ impl AngleStats {
 
 /// Normal jumps over all shared edges, and split by whether the sample lies in the half of an
 /// edge next to an irregular vertex (valence != 4).
-#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
+#[derive(Debug, Clone, Default, Serialize, PartialEq)]
 pub struct ContinuityReport {
     pub shared_edges: usize,
     pub all_deg: AngleStats,
     pub near_irregular_vertices_deg: AngleStats,
     pub elsewhere_deg: AngleStats,
     pub irregular_vertices: usize,
+    /// The largest jumps (at most [`WORST_LISTED`]), largest first: where to look in a CAD
+    /// viewer.
+    pub worst: Vec<JumpSample>,
+}
+
+/// How many of the largest jumps [`ContinuityReport::worst`] lists.
+pub const WORST_LISTED: usize = 10;
+
+/// One measured normal jump.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct JumpSample {
+    /// Edge index in the network (the order of the STEP EDGE_CURVEs).
+    pub edge: usize,
+    /// Position along the edge, 0..1 from its first vertex.
+    pub t: f64,
+    /// Point on the edge (first face's surface), model units.
+    pub point: [f64; 3],
+    pub angle_deg: f64,
+    /// Whether the sample lies in the half of the edge next to an irregular vertex.
+    pub near_irregular: bool,
 }
 
 /// Parameters (u, v) on `face` of the point at `t` in [0, 1] along loop side `k`, in the
@@ -80,8 +100,7 @@ pub fn normal_jumps(net: &PatchNetwork, samples_per_edge: usize) -> ContinuityRe
     }
     let irregular: Vec<bool> = valence.iter().map(|&v| v != 4).collect();
     let n = samples_per_edge.max(1);
-    // (angle, near an irregular vertex)
-    let per_edge: Vec<Vec<(f64, bool)>> = uses
+    let per_edge: Vec<Vec<JumpSample>> = uses
         .par_iter()
         .enumerate()
         .map(|(e, u)| {
@@ -93,9 +112,14 @@ pub fn normal_jumps(net: &PatchNetwork, samples_per_edge: usize) -> ContinuityRe
                 .filter_map(|i| {
                     let t = (i as f64 + 0.5) / n as f64;
                     let mut normals = [nalgebra::Vector3::zeros(); 2];
+                    let mut point = [0.0; 3];
                     for (slot, &(fi, k, rev)) in u.iter().enumerate() {
                         let (uu, vv) = side_uv(net, fi, k, rev, t);
                         let face = &net.faces[fi];
+                        if slot == 0 {
+                            let p = face.surface.evaluate(uu, vv);
+                            point = [p.x, p.y, p.z];
+                        }
                         let nrm = face.surface.normal(uu, vv)?;
                         normals[slot] = if face.same_sense { nrm } else { -nrm };
                     }
@@ -105,7 +129,13 @@ pub fn normal_jumps(net: &PatchNetwork, samples_per_edge: usize) -> ContinuityRe
                     } else {
                         irregular[ev[1] as usize]
                     };
-                    Some((c.acos().to_degrees(), near))
+                    Some(JumpSample {
+                        edge: e,
+                        t,
+                        point,
+                        angle_deg: c.acos().to_degrees(),
+                        near_irregular: near,
+                    })
                 })
                 .collect()
         })
@@ -113,20 +143,31 @@ pub fn normal_jumps(net: &PatchNetwork, samples_per_edge: usize) -> ContinuityRe
     let mut all = Vec::new();
     let mut near = Vec::new();
     let mut far = Vec::new();
+    let mut worst: Vec<JumpSample> = Vec::new();
     for s in per_edge.iter().flatten() {
-        all.push(s.0);
-        if s.1 {
-            near.push(s.0);
+        all.push(s.angle_deg);
+        if s.near_irregular {
+            near.push(s.angle_deg);
         } else {
-            far.push(s.0);
+            far.push(s.angle_deg);
         }
+        worst.push(*s);
     }
+    // Deterministic: by angle, ties by edge and position.
+    worst.sort_by(|a, b| {
+        b.angle_deg
+            .total_cmp(&a.angle_deg)
+            .then(a.edge.cmp(&b.edge))
+            .then(a.t.total_cmp(&b.t))
+    });
+    worst.truncate(WORST_LISTED);
     ContinuityReport {
         shared_edges: uses.iter().filter(|u| u.len() == 2).count(),
         all_deg: AngleStats::of(&mut all),
         near_irregular_vertices_deg: AngleStats::of(&mut near),
         elsewhere_deg: AngleStats::of(&mut far),
         irregular_vertices: irregular.iter().filter(|&&x| x).count(),
+        worst,
     }
 }
 

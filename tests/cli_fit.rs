@@ -1,0 +1,204 @@
+//! `scansurf fit` end to end, checked by the independent OpenCASCADE reader
+//! (`../shared/tools/cad_check.py`): the bunny acceptance of the fit issue, IGES, point clouds
+//! without normals, determinism and bad options.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_scansurf"))
+}
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn bunny() -> Option<PathBuf> {
+    let p = repo().join("../shared/data/stanford-bunny.obj");
+    if p.exists() {
+        Some(p)
+    } else if std::env::var_os("CI").is_some() {
+        panic!("CI: ../shared/data/stanford-bunny.obj is missing");
+    } else {
+        eprintln!("SKIPPED: no ../shared/data");
+        None
+    }
+}
+
+fn fit(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let report = out.with_extension("json");
+    let o = bin()
+        .arg("fit")
+        .arg(input)
+        .arg("-o")
+        .arg(out)
+        .arg("--report")
+        .arg(&report)
+        .arg("-q")
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "fit {} failed: {}",
+        input.display(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap()
+}
+
+fn f(v: &serde_json::Value, path: &[&str]) -> f64 {
+    let mut x = v;
+    for k in path {
+        x = &x[*k];
+    }
+    x.as_f64()
+        .unwrap_or_else(|| panic!("{path:?} missing in {v}"))
+}
+
+/// The fit issue's acceptance on the Stanford bunny (default options), measured by
+/// OpenCASCADE on the STEP file.
+#[test]
+fn bunny_step_is_valid_closed_and_accurate() {
+    let Some(input) = bunny() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let step = dir.path().join("bunny.step");
+    let r = fit(&input, &step, &[]);
+    let patches = f(&r, &["patches"]);
+    assert!(
+        (patches - 1500.0).abs() <= 0.15 * 1500.0,
+        "{patches} patches"
+    );
+    assert_eq!(r["closed"], true);
+    assert_eq!(f(&r, &["free_edges"]), 0.0);
+    // Our own measure (exact edge parameters) of the normal jump.
+    assert!(
+        f(&r, &["continuity", "all_deg", "p95"]) <= 1.0,
+        "{}",
+        r["continuity"]
+    );
+    let dev = &r["deviation"]["relative"];
+    assert!(
+        f(dev, &["mean"]) <= 2e-4 && f(dev, &["p99"]) <= 1e-3,
+        "{dev}"
+    );
+    let Some((py, script)) = common::checker() else {
+        eprintln!("SKIPPED: cad_check");
+        return;
+    };
+    let c = common::cad_check(&py, &script, &step, Some(&input));
+    assert_eq!(c["read_ok"], true);
+    assert_eq!(c["reader_problems"].as_array().map(|a| a.len()), Some(0));
+    assert_eq!(c["valid"], true);
+    assert_eq!(f(&c, &["faces"]), patches);
+    assert_eq!(f(&c, &["bspline_faces"]), patches);
+    assert_eq!(c["closed"], true);
+    assert_eq!(f(&c, &["free_edges"]), 0.0);
+    assert!(
+        f(&c, &["normal_jump_deg", "p95"]) <= 1.0,
+        "{}",
+        c["normal_jump_deg"]
+    );
+    let d = &c["deviation"];
+    assert!(f(d, &["mean_rel"]) <= 2e-4, "{d}");
+    assert!(f(d, &["p99_rel"]) <= 1e-3, "{d}");
+}
+
+/// IGES 5.3 of the same network reads back with one B-spline face per patch; the STEP and IGES
+/// files of two runs are byte-identical (including the header stamps).
+#[test]
+fn iges_reads_back_and_runs_are_deterministic() {
+    let input = repo().join("fixtures/spot.obj");
+    // Same file names in two directories: the names are part of the headers.
+    let (d1, d2) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let (a, b) = (d1.path().join("spot.step"), d2.path().join("spot.step"));
+    let (ia, ib) = (d1.path().join("spot.igs"), d2.path().join("spot.igs"));
+    let ra = fit(
+        &input,
+        &a,
+        &["--patches", "300", "--iges", ia.to_str().unwrap()],
+    );
+    fit(
+        &input,
+        &b,
+        &["--patches", "300", "--iges", ib.to_str().unwrap()],
+    );
+    assert!(
+        std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap(),
+        "STEP files of two runs differ"
+    );
+    assert!(
+        std::fs::read(&ia).unwrap() == std::fs::read(&ib).unwrap(),
+        "IGES files of two runs differ"
+    );
+    assert_eq!(ra["closed"], true);
+    assert!(f(&ra["deviation"]["relative"], &["mean"]) <= 3e-4);
+    let Some((py, script)) = common::checker() else {
+        eprintln!("SKIPPED: cad_check");
+        return;
+    };
+    let c = common::cad_check(&py, &script, &ia, None);
+    assert_eq!(c["read_ok"], true);
+    assert_eq!(c["valid"], true);
+    assert_eq!(f(&c, &["faces"]), f(&ra, &["patches"]));
+    assert_eq!(f(&c, &["bspline_faces"]), f(&ra, &["patches"]));
+}
+
+/// The bunny's vertices alone, as a cloud without normals: normals are estimated and oriented,
+/// the result is closed and within the issue's bar.
+#[test]
+fn bunny_cloud_without_normals() {
+    let Some(input) = bunny() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(&input).unwrap();
+    let xyz: String = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let cloud = dir.path().join("bunny.xyz");
+    std::fs::write(&cloud, xyz).unwrap();
+    let r = fit(&cloud, &dir.path().join("cloud.step"), &[]);
+    assert_eq!(r["normal_source"], "Estimated");
+    assert_eq!(r["closed"], true);
+    assert!(
+        f(&r["deviation"]["relative"], &["mean"]) <= 3e-4,
+        "{}",
+        r["deviation"]
+    );
+}
+
+/// Bad options fail before any work, with a message, and leave no file behind.
+#[test]
+fn bad_options_leave_nothing() {
+    let input = repo().join("fixtures/spot.obj");
+    let dir = tempfile::tempdir().unwrap();
+    for (out, extra, needle) in [
+        ("x.txt", vec![], "must end in"),
+        ("x.step", vec!["--patches", "0"], "at least 1"),
+        ("x.step", vec!["--tolerance=-1"], "tolerance"),
+        ("x.step", vec!["--unit", "furlong"], "furlong"),
+        ("x.step", vec!["--iges", "y.dxf"], "must end in"),
+    ] {
+        let o = bin()
+            .arg("fit")
+            .arg(&input)
+            .arg("-o")
+            .arg(dir.path().join(out))
+            .args(&extra)
+            .arg("-q")
+            .output()
+            .unwrap();
+        assert!(!o.status.success());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(needle), "{extra:?}: {err}");
+        assert!(!err.contains("panicked"));
+        assert_eq!(
+            std::fs::read_dir(dir.path()).unwrap().count(),
+            0,
+            "{extra:?}"
+        );
+    }
+}
