@@ -80,7 +80,7 @@ pub struct SampleOptions {
     /// Refinement rounds.
     pub max_rounds: usize,
     /// Largest turning of the surface normal between consecutive samples of an edge, degrees
-    /// (default 30): sides whose normals turn faster are refined, for continuity rather than
+    /// (default 20): sides whose normals turn faster are refined, for continuity rather than
     /// position.
     pub max_turn_deg: f64,
 }
@@ -93,7 +93,7 @@ impl SampleOptions {
             min_intervals: 2,
             max_intervals: 16,
             max_rounds: 6,
-            max_turn_deg: 30.0,
+            max_turn_deg: 20.0,
         }
     }
 }
