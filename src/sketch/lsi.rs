@@ -15,8 +15,46 @@
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 
-/// Non-negative least squares min ||A x - b|| s.t. x >= 0 (Lawson-Hanson active set).
+/// Non-negative least squares min ||A x - b|| s.t. x >= 0: Lawson-Hanson active set, and when
+/// round-off makes that cycle, projected Gauss-Seidel on the normal equations (monotone,
+/// converges for any A with non-zero columns).
 pub fn nnls(a: &DMatrix<f64>, b: &DVector<f64>) -> Result<DVector<f64>> {
+    nnls_active_set(a, b).or_else(|_| nnls_gauss_seidel(a, b))
+}
+
+/// Projected Gauss-Seidel: x_i <- max(0, x_i - (A^T A x - A^T b)_i / (A^T A)_ii).
+fn nnls_gauss_seidel(a: &DMatrix<f64>, b: &DVector<f64>) -> Result<DVector<f64>> {
+    let q = a.transpose() * a;
+    let c = a.transpose() * b;
+    let n = a.ncols();
+    let mut x = DVector::zeros(n);
+    for _ in 0..5000 {
+        let mut change = 0.0f64;
+        let mut size = 0.0f64;
+        for i in 0..n {
+            if q[(i, i)] <= 0.0 {
+                continue;
+            }
+            let g = q.row(i).dot(&x.transpose()) - c[i];
+            let v = (x[i] - g / q[(i, i)]).max(0.0);
+            change = change.max((v - x[i]).abs());
+            x[i] = v;
+            size = size.max(v.abs());
+        }
+        if change <= 1e-12 * size.max(1e-300) {
+            return Ok(x);
+        }
+    }
+    if x.iter().all(|v| v.is_finite()) {
+        Ok(x)
+    } else {
+        Err(Error::Numerical(
+            "non-negative least squares did not converge".into(),
+        ))
+    }
+}
+
+fn nnls_active_set(a: &DMatrix<f64>, b: &DVector<f64>) -> Result<DVector<f64>> {
     let n = a.ncols();
     let mut x = DVector::zeros(n);
     let mut passive = vec![false; n];
@@ -65,7 +103,9 @@ pub fn nnls(a: &DMatrix<f64>, b: &DVector<f64>) -> Result<DVector<f64>> {
                 }
             }
             x += (&s - &x) * alpha;
-            banned.iter_mut().for_each(|b| *b = false);
+            if alpha > 0.0 {
+                banned.iter_mut().for_each(|b| *b = false);
+            }
             for &j in &idx {
                 if x[j] <= 1e-14 * scale || (s[j] <= 0.0 && x[j] <= 0.0) {
                     passive[j] = false;
