@@ -22,6 +22,7 @@ pub use skeleton3d::Weights;
 pub use volume::SketchImplicit;
 
 use crate::implicit::project::ProjectOptions;
+use crate::implicit::Implicit;
 use crate::mesh::{Aabb, Mesh, Topology};
 use crate::polygonize::{marching_cubes, refine, relax, RefineOptions};
 use crate::{Error, Result};
@@ -232,9 +233,15 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
     bb.max += nalgebra::Vector3::repeat(pad);
     let mut mesh = marching_cubes(&f, &seeds, &bb, opts.cell)?;
     if mesh.faces.is_empty() {
-        return Err(Error::Degenerate(
-            "the fitted volume has no surface near the drawing".into(),
-        ));
+        let (wmin, wmax) = f.parts[0]
+            .weights
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(a, b), w| (a.min(*w), b.max(*w)));
+        return Err(Error::Degenerate(format!(
+            "the fitted volume has no surface near the drawing (weights {wmin:.3e}..{wmax:.3e}, f = {:.3e} at a centre, {:.3e} on the outline)",
+            f.value(&centers_all[0]),
+            f.value(&seeds[7])
+        )));
     }
     let proj = ProjectOptions::for_diagonal(1.0);
     relax(&mut mesh, &f, opts.relax_iterations, &proj);

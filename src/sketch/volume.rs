@@ -7,7 +7,8 @@
 //! As an [`Implicit`]: f_p(x) = s_p (C - F_p(x)), negative inside; s_p = r_mean / (2 C) makes
 //! |grad f| about 1 on the surface of a lone sphere, so f approximates a signed distance. Parts
 //! are combined by union (min), so parts kept apart by the depth constraints stay apart.
-//! A tiny softening eps_i^2 = (0.05 r_i)^2 in d^2 keeps f finite at the centres.
+//! A tiny softening eps_i^2 = (0.05 r_i)^2 in d^2 keeps f finite at the centres (radii are
+//! floored at 0.2 times their mean first).
 
 use super::lsi::nnls;
 use crate::error::Result;
@@ -42,6 +43,9 @@ impl SphereBlend {
     /// Fits the weights to the silhouette points `sil` (seed 001 section 5).
     pub fn fit(centers: Vec<Point3<f64>>, radius: &[f64], sil: &[Point3<f64>]) -> Result<Self> {
         let n = centers.len();
+        let rmean = radius.iter().sum::<f64>() / n.max(1) as f64;
+        // Floors against skeleton nodes that touch the outline (radius near 0).
+        let radius: Vec<f64> = radius.iter().map(|r| r.max(0.2 * rmean)).collect();
         let eps2: Vec<f64> = radius.iter().map(|r| (0.05 * r).powi(2)).collect();
         let m = sil.len();
         let lambda = 0.05f64;
@@ -61,7 +65,6 @@ impl SphereBlend {
             b[m + i] = lambda.sqrt() * ISO;
         }
         let w = nnls(&a, &b)?;
-        let rmean = radius.iter().sum::<f64>() / n.max(1) as f64;
         Ok(SphereBlend {
             centers,
             weights: w.iter().copied().collect(),
