@@ -175,7 +175,7 @@ pub fn analyse(
     for (k, c) in contours.iter().enumerate() {
         let len = perimeter(c);
         let area = signed_area(c).abs();
-        if !(area > 1e-6 * len * len) {
+        if area.partial_cmp(&(1e-6 * len * len)) != Some(std::cmp::Ordering::Greater) {
             return Err(Error::Degenerate(format!(
                 "contour {k} encloses no area (a line or a point)"
             )));
@@ -214,7 +214,7 @@ pub fn analyse(
     let mut part_of = vec![usize::MAX; n];
     let mut parts: Vec<Part> = Vec::new();
     for k in 0..n {
-        if depth[k] % 2 == 0 {
+        if depth[k].is_multiple_of(2) {
             part_of[k] = parts.len();
             parts.push(Part {
                 contour: k,
@@ -224,7 +224,7 @@ pub fn analyse(
         }
     }
     for k in 0..n {
-        if depth[k] % 2 == 1 {
+        if !depth[k].is_multiple_of(2) {
             // The hole belongs to the innermost outer contour holding it.
             let owner = (0..n)
                 .filter(|&i| depth[i] + 1 == depth[k] && contains(i, k))

@@ -2,21 +2,24 @@
 //! yN_i) (depth and the slopes dz/dx, dz/dy of the local quadratic surface), found by
 //! min ||U_Total X|| s.t. M_C1 X = 0, M_Coll X >= d_z (eq. 1).
 //!
-//! * C1 continuity (eq. 4-5): on edge j = (i, k) the quadratic S_j(x, y) = a x^2 + b x + c y^2
-//!   + d y + e xy + f must interpolate both end values and slopes; the 6x6 system of eq. 4 has
-//!   rank 5, its compatibility condition is the row of eq. 5. Written symmetrically (restricting
-//!   S_j to the edge gives a 1D quadratic, for which g(1) - g(0) = (g'(0) + g'(1)) / 2):
+//! * C1 continuity (eq. 4-5): on edge j = (i, k) the quadratic
+//!   S_j(x, y) = a x^2 + b x + c y^2 + d y + e xy + f must interpolate both end values and
+//!   slopes; the 6x6 system of eq. 4 has rank 5, its compatibility condition is the row of
+//!   eq. 5. Written symmetrically (restricting S_j to the edge gives a 1D quadratic, for which
+//!   g(1) - g(0) = (g'(0) + g'(1)) / 2):
 //!   z_k - z_i = ((xN_i + xN_k) dx + (yN_i + yN_k) dy) / 2, which is eq. 5 multiplied by
 //!   (y_i - y_k) / 2 and has no division by y_i - y_k.
-//! * Bending (eq. 6-10): thin-plate energy with D = 2, nu = 1/2, E_j = l_j^2 (4a^2 + 4c^2 + e^2
-//!   + 4ac) = l_j^2 ||U' C_j||^2; C_j = M_{X->C} X_{i,k} is the least-bending quadratic through
-//!   the end data (eq. 7-9), computed here as C = (I - N (U'N)^T U' / |U'N|^2) M^+ X with N the
-//!   null vector of M (same minimiser as the paper's block elimination, no 5x5 pivot choice).
-//!   Coordinates are taken relative to the edge midpoint (a, c, e do not depend on the origin).
+//! * Bending (eq. 6-10): thin-plate energy with D = 2, nu = 1/2,
+//!   E_j = l_j^2 (4a^2 + 4c^2 + e^2 + 4ac) = l_j^2 ||U' C_j||^2; C_j = M_{X->C} X_{i,k} is the
+//!   least-bending quadratic through the end data (eq. 7-9), computed here as
+//!   C = (I - N (U'N)^T U' / |U'N|^2) M^+ X with N the null vector of M (same minimiser as the
+//!   paper's block elimination, no 5x5 pivot choice). Coordinates are taken relative to the
+//!   edge midpoint (a, c, e do not depend on the origin).
 //! * Orientation (eq. 11): xN_i^2 + yN_i^2. Distance to the sketch plane (eq. 12): z_i^2.
 //! * No collision (eq. 2-3): where a front part's vertex i and a back part's vertex k are
-//!   closer in the plane than l < r_i + r_k + d_MinSurf, z_i - z_k >= sqrt((r_i + r_k +
-//!   d_MinSurf)^2 - l^2). The viewer is at +z: front means larger z.
+//!   closer in the plane than l < r_i + r_k + d_MinSurf,
+//!   z_i - z_k >= sqrt((r_i + r_k + d_MinSurf)^2 - l^2). The viewer is at +z: front means
+//!   larger z.
 
 use super::chordal_axis::Skeleton2;
 use super::lsi::lsei;
@@ -271,7 +274,7 @@ mod tests {
     #[test]
     fn lone_part_stays_flat_and_crossing_parts_separate_in_order() {
         let a = chain(0.0, -1.0, 1.0, 11, 0.2);
-        let s = solve(&[a.clone()], &[], &Weights::default(), 0.02).unwrap();
+        let s = solve(std::slice::from_ref(&a), &[], &Weights::default(), 0.02).unwrap();
         assert!(s.z.iter().all(|z| z.abs() < 1e-9));
         // A vertical bar crossing a horizontal one, the vertical in front.
         let mut b = chain(0.0, -1.0, 1.0, 11, 0.2);
