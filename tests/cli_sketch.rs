@@ -3,6 +3,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod common;
+
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("fixtures/sketch")
@@ -129,4 +131,29 @@ fn bad_drawings_fail_with_a_message() {
         .unwrap();
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("1e3"));
+}
+
+#[test]
+fn blob_to_step_through_the_fit_pipeline() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("blob.step");
+    let o = Command::new(env!("CARGO_BIN_EXE_scansurf"))
+        .args(["sketch", fixture("blob.svg").to_str().unwrap(), "-o"])
+        .arg(&out)
+        .args(["--patches", "200", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.starts_with("ISO-10303-21;"));
+    assert!(text.contains("CLOSED_SHELL"));
+    let Some((python, script)) = common::checker() else {
+        println!("SKIPPED: no .venv-check python or cad_check.py found");
+        return;
+    };
+    let v = common::cad_check(&python, &script, &out, None);
+    assert_eq!(v["read_ok"], true, "{v}");
+    assert_eq!(v["valid"], true, "{v}");
+    assert_eq!(v["closed"], true, "{v}");
+    assert_eq!(v["shells"].as_u64(), Some(1), "{v}");
 }
