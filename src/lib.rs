@@ -21,6 +21,7 @@ pub mod polygonize;
 pub mod quality;
 pub mod reconstruct;
 pub mod render;
+pub mod sketch;
 pub mod smooth;
 pub mod spatial;
 

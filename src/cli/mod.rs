@@ -7,6 +7,7 @@ mod inspect;
 pub mod progress;
 mod reconstruct;
 mod render;
+mod sketch;
 mod smooth;
 
 use clap::{Parser, Subcommand};
@@ -59,6 +60,12 @@ pub enum Command {
         after_help = "Examples:\n  scansurf reconstruct scan.xyz -o closed.ply\n  scansurf reconstruct bunny.obj -o bunny.ply --report bunny.json"
     )]
     Reconstruct(reconstruct::Args),
+    /// Closed 3D mesh from a 2D drawing of closed contours, overlapping parts kept apart in
+    /// depth (chordal axis, constrained least-squares skeleton, spherical implicits; seed 001).
+    #[command(
+        after_help = "Examples:\n  scansurf sketch blob.svg -o blob.ply\n  scansurf sketch knot.svg -o knot.obj --weights 1,0.1,0.5 --report knot.json"
+    )]
+    Sketch(sketch::Args),
 }
 
 /// Runs the command line; returns the process exit code.
@@ -77,6 +84,7 @@ pub fn run() -> i32 {
         Command::Smooth(a) => smooth::run(a, cli.quiet),
         Command::Render(a) => render::run(a, cli.quiet),
         Command::Reconstruct(a) => reconstruct::run(a, cli.quiet),
+        Command::Sketch(a) => sketch::run(a, cli.quiet),
     };
     match result {
         Ok(()) => 0,
