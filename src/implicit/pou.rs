@@ -25,7 +25,10 @@
 //!   nearest points, their tangent plane, or a constant) used only where nothing else reaches,
 //!   so that F is defined everywhere in the root cube.
 //!
-//! Outside the root cube F is the distance to the nearest point, signed by its normal.
+//! The three families meet in one quotient whose priorities fall smoothly to zero where the
+//! family above covers a point, so F is C2 in the whole root cube (no seam where the fitted
+//! cells' supports end; see `PouImplicit::blend`). Outside the supports (beyond the root cube's
+//! overlap) F is the distance to the nearest point, signed by its normal.
 //!
 //! Fitting is parallel (rayon, one octree level at a time, collected in order): the result does
 //! not depend on the thread count.
