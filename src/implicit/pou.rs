@@ -665,9 +665,22 @@ impl Builder<'_> {
         false
     }
 
+    /// True when `c` lies on the same side (outside both, or inside both) of two of the points
+    /// `near` whose normals face opposite ways: the gap between two sheets (a tail beside a
+    /// body, the inside of a thin part), where no hole needs bridging. A hole's rim has its
+    /// points on one sheet, or on both sides of a thin wall with `c` between them.
+    fn between_sheets(&self, near: &[(usize, f64)], c: &Point3<f64>) -> bool {
+        let side = |i: usize| (c - self.pts[i]).dot(&self.nrm[i]);
+        near.iter().any(|&(i, _)| {
+            near.iter()
+                .any(|&(j, _)| self.nrm[i].dot(&self.nrm[j]) < -0.5 && side(i) * side(j) > 0.0)
+        })
+    }
+
     /// An empty cell that the surface passes by rather than through (no tangent plane of the
-    /// nearest points cuts its box) only needs a rough signed distance: a quadratic fitted to
-    /// the nearest points, or the tangent plane of the nearest one. `None` for a possible hole.
+    /// nearest points cuts its box, or it lies between two sheets) only needs a rough signed
+    /// distance: a quadratic fitted to the nearest points, or the tangent plane of the nearest
+    /// one. `None` for a possible hole.
     fn side_cell(&self, c: &Point3<f64>, h0: f64) -> Option<Decision<Cell>> {
         let o = self.opts;
         let near = self.kd.knn(c, o.min_points);
@@ -675,6 +688,7 @@ impl Builder<'_> {
         if near
             .iter()
             .any(|&(i, _)| (c - self.pts[i]).dot(&self.nrm[i]).abs() <= reach)
+            && !self.between_sheets(&near, c)
         {
             return None;
         }
