@@ -4,6 +4,7 @@
 mod fill_holes;
 mod fit;
 mod inspect;
+pub mod interrupt;
 pub mod progress;
 mod reconstruct;
 mod render;
@@ -70,6 +71,7 @@ pub fn run() -> i32 {
             return if e.use_stderr() { 2 } else { 0 };
         }
     };
+    interrupt::install();
     let result = match cli.command {
         Command::Fit(a) => fit::run(a, cli.quiet),
         Command::FillHoles(a) => fill_holes::run(a, cli.quiet),
