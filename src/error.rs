@@ -52,6 +52,10 @@ pub enum Error {
     /// A user-supplied option is out of range or inconsistent.
     #[error("invalid option: {0}")]
     InvalidOption(String),
+    /// An allocation the input asks for exceeds the memory budget (`--max-memory`,
+    /// [`crate::limits`]).
+    #[error("{0}")]
+    Limit(String),
     /// A numerical method did not converge or met a singular system.
     #[error("numerical failure: {0}")]
     Numerical(String),

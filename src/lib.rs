@@ -13,6 +13,7 @@ pub mod holes;
 pub mod implicit;
 pub mod inspect;
 pub mod io;
+pub mod limits;
 pub mod mesh;
 pub mod metrics;
 pub mod normals;

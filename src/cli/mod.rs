@@ -4,6 +4,7 @@
 mod fill_holes;
 mod fit;
 mod inspect;
+pub mod interrupt;
 pub mod progress;
 mod reconstruct;
 mod render;
@@ -19,6 +20,11 @@ pub struct Cli {
     /// No progress bars on stderr.
     #[arg(long, short, global = true)]
     pub quiet: bool,
+    /// Memory budget, e.g. 8G or 500M: inputs and grids that would need more fail early with a
+    /// suggestion (coarser --patch-size or --resolution, --max-points). Default: 3/4 of the
+    /// physical memory.
+    #[arg(long, global = true, value_name = "SIZE")]
+    pub max_memory: Option<String>,
     #[command(subcommand)]
     pub command: Command,
 }
@@ -77,6 +83,18 @@ pub fn run() -> i32 {
             return if e.use_stderr() { 2 } else { 0 };
         }
     };
+    interrupt::install();
+    let budget = match cli.max_memory.as_deref().map(crate::limits::parse_size) {
+        Some(Ok(b)) => Some(b),
+        Some(Err(e)) => {
+            eprintln!("scansurf: error: {e}");
+            return 2;
+        }
+        None => crate::limits::default_max_memory(),
+    };
+    if let Some(b) = budget {
+        crate::limits::set_max_memory(b);
+    }
     let result = match cli.command {
         Command::Fit(a) => fit::run(a, cli.quiet),
         Command::FillHoles(a) => fill_holes::run(a, cli.quiet),
@@ -112,7 +130,9 @@ pub(crate) fn write_json<T: serde::Serialize>(
 /// numerical failure), so every message says which file it is about.
 pub(crate) fn with_input(e: crate::Error, input: &std::path::Path) -> crate::Error {
     match e {
-        crate::Error::Degenerate(m) | crate::Error::Numerical(m) => crate::Error::content(input, m),
+        crate::Error::Degenerate(m) | crate::Error::Numerical(m) | crate::Error::Limit(m) => {
+            crate::Error::content(input, m)
+        }
         other => other,
     }
 }

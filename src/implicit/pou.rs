@@ -287,9 +287,11 @@ impl PouImplicit {
             let ev = nalgebra::SymmetricEigen::new(cov / pts.len() as f64).eigenvalues;
             let thinnest = ev.min().max(0.0).sqrt();
             if thinnest <= 1e-6 * diagonal {
-                return Err(Error::Degenerate(
-                    "the points lie on a plane: they enclose no volume".into(),
-                ));
+                return Err(Error::Degenerate(format!(
+                    "the points lie on a plane: they enclose no volume (thinnest spread \
+                     {thinnest:.3e} against a bounding-box diagonal of {diagonal:.3e}; parts \
+                     far apart make each part look flat, so fit them separately)"
+                )));
             }
         }
         let kd = KdTree::build(&pts)?;

@@ -2,10 +2,51 @@
 //! final rename never crosses file systems), is flushed and synced, and only then renamed over
 //! the target. A failure or an interrupted run leaves the target untouched and removes the
 //! temporary file (tempfile deletes it on drop).
+//!
+//! Drop does not run when a signal ends the process, so every live temporary file is also listed
+//! in [`LIVE`]: the Ctrl-C handler ([`crate::cli::interrupt`]) deletes them and exits. The list's
+//! lock is held across the final rename, so an interrupt either sees the output complete or
+//! removes the temporary file before the rename: never a partial target. (SIGKILL cannot be
+//! caught: a kill inside the few milliseconds of writing can leave a hidden `.NAME.*.tmp`.)
 
 use crate::error::{Error, Result};
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Temporary files being written now (removed by the interrupt handler).
+static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Deletes every live temporary file and keeps the list locked, so no writer renames one into
+/// place afterwards; call only right before the process exits (the interrupt handler).
+pub fn remove_live_temp_files_and_hold() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    let guard = LIVE.lock().unwrap_or_else(|e| e.into_inner());
+    for p in guard.iter() {
+        let _ = std::fs::remove_file(p);
+    }
+    guard
+}
+
+/// Unlists a temporary file when it is dropped or persisted.
+struct Listed(PathBuf);
+
+impl Listed {
+    fn new(p: &Path) -> Listed {
+        LIVE.lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(p.to_path_buf());
+        Listed(p.to_path_buf())
+    }
+}
+
+impl Drop for Listed {
+    fn drop(&mut self) {
+        let mut live = LIVE.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(i) = live.iter().position(|p| *p == self.0) {
+            live.swap_remove(i);
+        }
+    }
+}
 
 /// Writes `path` through `body`, atomically.
 pub fn write_atomic<F>(path: &Path, body: F) -> Result<()>
@@ -32,11 +73,14 @@ where
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
+    // Declared before `tmp` so it is dropped after it: the file is listed for as long as it exists.
+    let listed: Listed;
     let tmp = tempfile::Builder::new()
         .prefix(&format!(".{name}."))
         .suffix(".tmp")
         .tempfile_in(&dir)
         .map_err(|e| Error::io(path, e))?;
+    listed = Listed::new(tmp.path());
     {
         let mut w = BufWriter::with_capacity(1 << 20, tmp.as_file());
         body(&mut w).map_err(|e| Error::io(path, e))?;
@@ -55,7 +99,13 @@ where
             .set_permissions(perms)
             .map_err(|e| Error::io(path, e))?;
     }
-    tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
+    // Rename under the list's lock: an interrupt waits for it, or came first and removed `tmp`.
+    let renamed = {
+        let _live = LIVE.lock().unwrap_or_else(|e| e.into_inner());
+        tmp.persist(path)
+    };
+    drop(listed);
+    renamed.map_err(|e| Error::io(path, e.error))?;
     Ok(())
 }
 

@@ -55,6 +55,25 @@ pub fn info(path: &Path) -> Result<E57Info> {
     })
 }
 
+/// Checks a scanner file's declared point count (24 bytes per point in memory) against the
+/// memory budget before anything is allocated.
+pub(crate) fn declared_fits(path: &Path, declared: u64) -> Result<()> {
+    crate::limits::check(
+        &format!("the {declared} points the header declares"),
+        24.0 * declared as f64,
+        "subsample the scan in its own software or raise --max-memory",
+    )
+    .map_err(|e| Error::content(path, e.to_string()))
+}
+
+/// Initial capacity for `declared` points: never more than the file has bytes (a header can
+/// claim billions of points that are not there; a compressed point takes at least a byte, and
+/// the vector grows past the hint if it must).
+pub(crate) fn capacity_hint(path: &Path, declared: u64) -> usize {
+    let len = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    declared.min(len).min(1 << 28) as usize
+}
+
 /// Reads all scans, poses applied, merged into one point cloud.
 pub fn read(path: &Path) -> Result<Mesh> {
     let mut reader = open(path)?;
@@ -66,7 +85,8 @@ pub fn read(path: &Path) -> Result<Mesh> {
         ));
     }
     let total: u64 = pcs.iter().map(|pc| pc.records).sum();
-    let mut pts: Vec<Point3<f64>> = Vec::with_capacity(total.min(1 << 28) as usize);
+    declared_fits(path, total)?;
+    let mut pts: Vec<Point3<f64>> = Vec::with_capacity(capacity_hint(path, total));
     let mut direction_only = 0u64;
     for (si, pc) in pcs.iter().enumerate() {
         if !pc.has_cartesian() && !pc.has_spherical() {

@@ -81,7 +81,8 @@ const CHUNK: u64 = 1 << 20;
 pub fn read(path: &Path) -> Result<Mesh> {
     let mut r = open(path)?;
     let declared = r.header().number_of_points();
-    let mut pts: Vec<Point3<f64>> = Vec::with_capacity(declared.min(1 << 28) as usize);
+    super::e57::declared_fits(path, declared)?;
+    let mut pts: Vec<Point3<f64>> = Vec::with_capacity(super::e57::capacity_hint(path, declared));
     let mut pd = PointDataBuilder::new().for_header(r.header()).build();
     loop {
         let n = r

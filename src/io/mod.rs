@@ -77,6 +77,14 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     if meta.is_dir() {
         return Err(Error::content(path, "is a directory, not a file"));
     }
+    // The bytes plus the mesh parsed from them: at most about twice the file (a binary float
+    // becomes an f64; text is longer than the numbers it holds).
+    crate::limits::check(
+        "reading this file",
+        3.0 * meta.len() as f64,
+        "use a machine with more memory or raise --max-memory",
+    )
+    .map_err(|e| Error::content(path, e.to_string()))?;
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     if bytes.is_empty() {
         return Err(Error::content(path, "file is empty"));

@@ -48,6 +48,8 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                     )?;
                     mesh.positions.push(Point3::from(c));
                 } else {
+                    // Found by fuzzing (tests/fuzz_regressions/obj): `vn 0.2E505` overflowed.
+                    super::text::check_finite(path, ln, c, &format!("normal {}", vn.len() + 1))?;
                     vn.push(Vector3::from(c));
                 }
             }

@@ -57,6 +57,8 @@ impl Grid {
             }
             dims[k] = (n as i64).max(1);
         }
+        // Sparse corner values and edge vertices of the crossed cubes (~256 bytes per cube).
+        crate::limits::check_surface_grid([ext.x, ext.y, ext.z], cell, 256.0)?;
         Ok(Grid {
             origin: domain.min,
             cell,

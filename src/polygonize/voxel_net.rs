@@ -216,6 +216,8 @@ impl Grid {
             }
             n[k] = cells as i64 + 2 * MARGIN;
         }
+        // Hash-map entries of the probed voxels and their net nodes (~256 bytes per cell).
+        crate::limits::check_surface_grid([ext.x, ext.y, ext.z], h, 256.0)?;
         Ok(Grid {
             origin: bounds.min - Vector3::repeat(MARGIN as f64 * h),
             h,
