@@ -60,7 +60,7 @@ fn check_dir(dir: &Path) -> Vec<String> {
 
 #[test]
 fn sigint_mid_run_leaves_no_output() {
-    for delay_ms in [300u64, 900] {
+    for delay_ms in [150u64, 500] {
         let dir = tempfile::tempdir().unwrap();
         let mut child = start_fit(dir.path());
         std::thread::sleep(Duration::from_millis(delay_ms));
@@ -88,7 +88,7 @@ fn sigint_mid_run_leaves_no_output() {
 fn sigkill_mid_run_leaves_no_output() {
     let dir = tempfile::tempdir().unwrap();
     let mut child = start_fit(dir.path());
-    std::thread::sleep(Duration::from_millis(600));
+    std::thread::sleep(Duration::from_millis(400));
     assert!(
         child.try_wait().unwrap().is_none(),
         "fit finished before the signal"
