@@ -181,14 +181,9 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         })?;
     }
     if let Some(p) = &a.preview {
-        let (mesh, lines) = crate::nurbs::tessellate::tessellate(&network, 8);
-        let img = crate::render::render_mesh(
-            &mesh,
-            None,
-            &lines,
-            &crate::render::RenderOptions::default(),
-        )?;
-        img.save_png(p)?;
+        let dist = Some(report.deviation.distances.as_slice());
+        let opts = crate::render::RenderOptions::default();
+        crate::render::patches::network_preview(&network, &pts, dist, &opts)?.save_png(p)?;
     }
     if !quiet {
         let dev = &report.deviation.stats.relative;

@@ -1,4 +1,8 @@
 //! `scansurf render INPUT -o OUT.png [--against CLOUD] [--view iso|front|top|side] [--size WxH]`.
+//!
+//! INPUT is a mesh or point cloud, or a STEP model of B-spline faces (`.step`/`.stp`, read by
+//! [`crate::io::step`]): its faces are tessellated and shaded and each face's parameter-domain
+//! boundary is drawn as a dark line, showing the patch network.
 
 use crate::error::{Error, Result};
 use crate::render::{self, ColorScale, RenderOptions, UpAxis, View};
@@ -6,7 +10,8 @@ use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Mesh or point cloud to draw (.ply .obj .stl .xyz .e57 .las .laz ...).
+    /// Mesh, point cloud (.ply .obj .stl .xyz .e57 .las .laz ...) or STEP model of B-spline
+    /// faces (.step .stp) to draw; STEP faces get their patch boundaries as dark lines.
     pub input: PathBuf,
     /// PNG to write.
     #[arg(short, long)]
@@ -44,7 +49,20 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     let (width, height) = render::parse_size(&a.size)?;
     let view: View = a.view.parse()?;
     let up: UpAxis = a.up.parse()?;
-    let mut mesh = crate::io::read_mesh(&a.input)?;
+    let (mut mesh, lines) = if is_step(&a.input) {
+        let model = crate::io::step::read_step(&a.input)?;
+        let faces: Vec<render::patches::FaceRef> = model
+            .faces
+            .iter()
+            .map(|f| render::patches::FaceRef {
+                surface: &f.surface,
+                same_sense: f.same_sense,
+            })
+            .collect();
+        render::patches::tessellate_faces(&faces, render::patches::resolution(faces.len()))
+    } else {
+        (crate::io::read_mesh(&a.input)?, Vec::new())
+    };
     if let Some(max) = a.max_points {
         mesh = crate::mesh::subsample::limit_points(mesh, max)?;
     }
@@ -68,9 +86,9 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     let img = match &scalars {
         Some(d) => {
             let scale = ColorScale::auto(d)?;
-            render::render_mesh(&mesh, Some((d, scale)), &[], &opts)?
+            render::render_mesh(&mesh, Some((d, scale)), &lines, &opts)?
         }
-        None => render::render_mesh(&mesh, None, &[], &opts)?,
+        None => render::render_mesh(&mesh, None, &lines, &opts)?,
     };
     img.save_png(&a.output)?;
     spinner.finish_and_clear();
@@ -85,6 +103,13 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Whether the path names a STEP file (.step, .stp).
+fn is_step(path: &std::path::Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("step") || e.eq_ignore_ascii_case("stp"))
 }
 
 /// Distance from every vertex of `mesh` to the nearest point of `cloud`.

@@ -11,6 +11,7 @@ pub mod e57;
 pub mod las;
 pub mod obj;
 pub mod ply;
+pub mod step;
 pub mod stl;
 pub mod text;
 pub mod xyz;

@@ -23,6 +23,7 @@ pub mod font;
 pub mod image;
 pub mod legend;
 pub mod lines;
+pub mod patches;
 pub mod raster;
 pub mod shade;
 
