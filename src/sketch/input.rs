@@ -30,6 +30,12 @@ pub struct Drawing {
 /// Reads an SVG or JSON drawing (by extension; content sniffing when the extension is neither).
 pub fn read_drawing(path: &Path) -> Result<Drawing> {
     let bytes = crate::io::read_bytes(path)?;
+    parse_drawing(path, bytes)
+}
+
+/// Parses a drawing from its bytes (`path` names it in errors and chooses SVG or JSON by
+/// extension): the entry point of the SVG/JSON fuzz target.
+pub fn parse_drawing(path: &Path, bytes: Vec<u8>) -> Result<Drawing> {
     let text = String::from_utf8(bytes)
         .map_err(|_| Error::content(path, "the drawing is not UTF-8 text"))?;
     if text.trim().is_empty() {
