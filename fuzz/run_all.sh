@@ -10,7 +10,7 @@ cd fuzz
 mkdir -p logs
 target_dir=${CARGO_TARGET_DIR:-target}
 [ -n "${NO_BUILD:-}" ] || cargo +nightly fuzz build -O || exit 1
-for t in ${TARGETS:-ply obj stl xyz adjacency}; do
+for t in ${TARGETS:-ply obj stl xyz adjacency svg}; do
   mkdir -p corpus/$t
   echo "$(date -u +%FT%TZ) start $t" >> logs/summary.txt
   "$target_dir"/x86_64-unknown-linux-gnu/release/$t corpus/$t seeds/$t \
