@@ -29,6 +29,10 @@ pub struct Args {
     /// Picture size WxH in pixels.
     #[arg(long, default_value = "1600x1200")]
     pub size: String,
+    /// Draw only what lies within R of (X, Y, Z), framed to fill the picture: e.g. a spot the
+    /// `fit` report lists among its largest normal jumps.
+    #[arg(long, value_name = "X,Y,Z,R")]
+    pub focus: Option<String>,
     /// Subsample point clouds above this many points (voxel grid) before drawing.
     #[arg(long)]
     pub max_points: Option<usize>,
@@ -49,6 +53,10 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     let (width, height) = render::parse_size(&a.size)?;
     let view: View = a.view.parse()?;
     let up: UpAxis = a.up.parse()?;
+    let focus = match &a.focus {
+        Some(f) => Some(f.parse::<render::focus::Focus>()?),
+        None => None,
+    };
     let (mut mesh, lines) = if is_step(&a.input) {
         let model = crate::io::step::read_step(&a.input)?;
         let faces: Vec<render::patches::FaceRef> = model
@@ -66,6 +74,10 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     if let Some(max) = a.max_points {
         mesh = crate::mesh::subsample::limit_points(mesh, max)?;
     }
+    let (mesh, lines) = match &focus {
+        Some(f) => f.crop(mesh, &lines)?,
+        None => (mesh, lines),
+    };
     let opts = RenderOptions {
         width,
         height,

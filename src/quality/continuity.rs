@@ -44,6 +44,12 @@ pub struct ContinuityReport {
     pub near_irregular_vertices_deg: AngleStats,
     pub elsewhere_deg: AngleStats,
     pub irregular_vertices: usize,
+    /// Samples whose jump exceeds 1, 5 and 10 degrees (out of `all_deg.samples`).
+    pub samples_over_1_deg: usize,
+    pub samples_over_5_deg: usize,
+    pub samples_over_10_deg: usize,
+    /// Shared edges with at least one sample over 5 degrees.
+    pub edges_over_5_deg: usize,
     /// The largest jumps (at most [`WORST_LISTED`]), largest first: where to look in a CAD
     /// viewer.
     pub worst: Vec<JumpSample>,
@@ -160,8 +166,19 @@ pub fn normal_jumps(net: &PatchNetwork, samples_per_edge: usize) -> ContinuityRe
             .then(a.edge.cmp(&b.edge))
             .then(a.t.total_cmp(&b.t))
     });
+    let over = |d: f64| all.iter().filter(|&&a| a > d).count();
+    let (samples_over_1_deg, samples_over_5_deg, samples_over_10_deg) =
+        (over(1.0), over(5.0), over(10.0));
+    let edges_over_5_deg = per_edge
+        .iter()
+        .filter(|e| e.iter().any(|s| s.angle_deg > 5.0))
+        .count();
     worst.truncate(WORST_LISTED);
     ContinuityReport {
+        samples_over_1_deg,
+        samples_over_5_deg,
+        samples_over_10_deg,
+        edges_over_5_deg,
         shared_edges: uses.iter().filter(|u| u.len() == 2).count(),
         all_deg: AngleStats::of(&mut all),
         near_irregular_vertices_deg: AngleStats::of(&mut near),

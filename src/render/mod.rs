@@ -19,6 +19,7 @@
 pub mod camera;
 pub mod cloud;
 pub mod colormap;
+pub mod focus;
 pub mod font;
 pub mod image;
 pub mod legend;
