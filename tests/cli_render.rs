@@ -96,3 +96,97 @@ fn inspect_reports_scans() {
     assert_eq!(v["scans"], 2);
     assert_eq!(v["vertices"], 1981);
 }
+
+/// Fits a small STEP from the spot fixture (about 300 patches, a second) into `dir`.
+/// (At 100 patches the cow's legs fold into a large back-facing sheet, seen in the render.)
+fn fitted_step(dir: &Path) -> String {
+    let step = dir.join("spot.step");
+    let (code, _, err) = run(&[
+        "fit",
+        &fixture("spot.obj"),
+        "-o",
+        step.to_str().unwrap(),
+        "--patches",
+        "300",
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    step.display().to_string()
+}
+
+fn render_stats(input: &str, out: &Path, extra: &[&str]) -> scansurf::render::ImageStats {
+    let mut args = vec![
+        "render",
+        input,
+        "-o",
+        out.to_str().unwrap(),
+        "--size",
+        "480x360",
+        "--view",
+        "side",
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    let (code, _, err) = run(&args);
+    assert_eq!(code, 0, "{input}: {err}");
+    Image::load_png(out).unwrap().stats([255, 255, 255])
+}
+
+/// A fitted STEP renders shaded, filling the frame, with its patch boundaries as dark lines:
+/// many more dark pixels than the same object rendered as a mesh (outlines only); hardly any
+/// coloured pixels (back faces are drawn orange: a folded patch would show).
+#[test]
+fn renders_step_with_patch_boundaries() {
+    let dir = tempfile::tempdir().unwrap();
+    let step = fitted_step(dir.path());
+    let s = render_stats(&step, &dir.path().join("step.png"), &[]);
+    let m = render_stats(&fixture("spot.obj"), &dir.path().join("mesh.png"), &[]);
+    println!("step {s:?}\nmesh {m:?}");
+    // A side view of the cow covers 30% of a 4:3 frame (its extent spans 90% of the width).
+    assert!(s.foreground_fraction > 0.25, "{s:?}");
+    assert!(s.grey_levels >= 40, "{s:?}");
+    assert!(s.colored_fraction < 0.01, "{s:?}");
+    assert!(s.dark_fraction > 0.05, "{s:?}");
+    assert!(
+        s.dark_fraction > 3.0 * m.dark_fraction,
+        "{s:?} vs mesh {m:?}"
+    );
+    // The same object: the same coverage within a few percent.
+    assert!(
+        (s.foreground_fraction - m.foreground_fraction).abs() < 0.05,
+        "{s:?} vs {m:?}"
+    );
+}
+
+/// A fitted STEP coloured by the distance to the points it was fitted to (`--against`), and the
+/// `fit --preview` picture (coloured by the points' deviation): colour, legend, boundaries.
+#[test]
+fn renders_step_deviation_colours() {
+    let dir = tempfile::tempdir().unwrap();
+    let step = fitted_step(dir.path());
+    let s = render_stats(
+        &step,
+        &dir.path().join("dev.png"),
+        &["--against", &fixture("spot.laz")],
+    );
+    println!("against {s:?}");
+    assert!(s.foreground_fraction > 0.2, "{s:?}");
+    assert!(s.colored_fraction > 0.3, "{s:?}");
+    let png = dir.path().join("preview.png");
+    let (code, _, err) = run(&[
+        "fit",
+        &fixture("spot_2scans.e57"),
+        "-o",
+        dir.path().join("e57.step").to_str().unwrap(),
+        "--patches",
+        "150",
+        "--preview",
+        png.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let p = Image::load_png(&png).unwrap().stats([255, 255, 255]);
+    println!("preview {p:?}");
+    assert!(p.foreground_fraction > 0.2, "{p:?}");
+    assert!(p.colored_fraction > 0.3, "{p:?}");
+}
