@@ -158,8 +158,9 @@ fn renders_step_with_patch_boundaries() {
     );
 }
 
-/// A fitted STEP coloured by the distance to the points it was fitted to (`--against`), and the
-/// `fit --preview` picture (coloured by the points' deviation): colour, legend, boundaries.
+/// A fitted STEP coloured by the distance to the points it was fitted to (`--against`), the
+/// `fit --preview` picture (coloured by the points' deviation) and the same deviation drawn
+/// afterwards by `render --deviation` from `fit --deviation-ply`.
 #[test]
 fn renders_step_deviation_colours() {
     let dir = tempfile::tempdir().unwrap();
@@ -173,15 +174,19 @@ fn renders_step_deviation_colours() {
     assert!(s.foreground_fraction > 0.2, "{s:?}");
     assert!(s.colored_fraction > 0.3, "{s:?}");
     let png = dir.path().join("preview.png");
+    let e57_step = dir.path().join("e57.step");
+    let dev_ply = dir.path().join("dev.ply");
     let (code, _, err) = run(&[
         "fit",
         &fixture("spot_2scans.e57"),
         "-o",
-        dir.path().join("e57.step").to_str().unwrap(),
+        e57_step.to_str().unwrap(),
         "--patches",
         "150",
         "--preview",
         png.to_str().unwrap(),
+        "--deviation-ply",
+        dev_ply.to_str().unwrap(),
         "--quiet",
     ]);
     assert_eq!(code, 0, "{err}");
@@ -189,6 +194,39 @@ fn renders_step_deviation_colours() {
     println!("preview {p:?}");
     assert!(p.foreground_fraction > 0.2, "{p:?}");
     assert!(p.colored_fraction > 0.3, "{p:?}");
+    // The same deviation drawn afterwards from the fit's --deviation-ply.
+    let d = render_stats(
+        e57_step.to_str().unwrap(),
+        &dir.path().join("dev_ply.png"),
+        &["--deviation", dev_ply.to_str().unwrap()],
+    );
+    println!("--deviation {d:?}");
+    assert!(d.foreground_fraction > 0.2, "{d:?}");
+    assert!(d.colored_fraction > 0.3, "{d:?}");
+    // Not with --against; not from a PLY without the `quality` scalar.
+    let out = dir.path().join("x.png");
+    let (code, _, err) = run(&[
+        "render",
+        e57_step.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--deviation",
+        dev_ply.to_str().unwrap(),
+        "--against",
+        &fixture("spot.laz"),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    let (code, _, err) = run(&[
+        "render",
+        e57_step.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--deviation",
+        &fixture("spot_tristrips_le.ply"),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("quality"), "{err}");
+    assert!(!out.exists());
 }
 
 /// The Stanford bunny (shared data) as a mesh and as its bare vertices: both fill the frame,
