@@ -57,7 +57,7 @@ pub enum Command {
     /// Draw a mesh or point cloud to a PNG (software renderer, no GPU), optionally coloured by
     /// the distance to a reference cloud.
     #[command(
-        after_help = "Examples:\n  scansurf render bunny.obj -o bunny.png\n  scansurf render scan.ply -o scan.png --view front --size 800x600\n  scansurf render recon.ply -o dev.png --against scan.xyz"
+        after_help = "Examples:\n  scansurf render bunny.obj -o bunny.png\n  scansurf render scan.ply -o scan.png --view front --size 800x600\n  scansurf render recon.ply -o dev.png --against scan.xyz\n  scansurf render part.step -o dev.png --deviation dev.ply   # from fit --deviation-ply"
     )]
     Render(render::Args),
     /// Closed, manifold triangle mesh from a point cloud or a mesh with holes (implicit surface

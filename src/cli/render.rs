@@ -1,4 +1,4 @@
-//! `scansurf render INPUT -o OUT.png [--against CLOUD] [--view iso|front|top|side] [--size WxH]`.
+//! `scansurf render INPUT -o OUT.png [--against CLOUD | --deviation D.ply] [--view iso|front|top|side] [--size WxH]`.
 //!
 //! INPUT is a mesh or point cloud, or a STEP model of B-spline faces (`.step`/`.stp`, read by
 //! [`crate::io::step`]): its faces are tessellated and shaded and each face's parameter-domain
@@ -20,6 +20,11 @@ pub struct Args {
     /// legend in model units.
     #[arg(long, value_name = "CLOUD")]
     pub against: Option<PathBuf>,
+    /// Colour the input by the deviation of the scan points stored in this `fit
+    /// --deviation-ply` file (each surface point takes the value of its nearest scan point;
+    /// scale 0 to the 99th percentile), with a legend.
+    #[arg(long, value_name = "D.ply", conflicts_with = "against")]
+    pub deviation: Option<PathBuf>,
     /// iso, front, top or side.
     #[arg(long, default_value = "iso")]
     pub view: String,
@@ -86,20 +91,31 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         ..RenderOptions::default()
     };
     let spinner = super::progress::spinner("rendering", quiet);
-    let scalars = match &a.against {
-        None => None,
-        Some(c) => {
+    let scalars = match (&a.against, &a.deviation) {
+        (Some(c), _) => {
             let cloud = crate::io::read_mesh(c)?;
             let d = nearest_distances(&mesh, &cloud.positions)
                 .map_err(|e| Error::content(c, e.to_string()))?;
-            Some(d)
+            let scale = ColorScale::auto(&d)?;
+            Some((d, scale))
         }
+        (None, Some(dp)) => {
+            let (points, dev) = crate::io::ply::read_scalar_cloud(dp, "quality")?;
+            let coloured = render::patches::point_deviation_colours(&mesh.positions, &points, &dev)
+                .map_err(|e| Error::content(dp, e.to_string()))?;
+            let Some(c) = coloured else {
+                return Err(Error::content(dp, "no finite deviation value"));
+            };
+            Some(c)
+        }
+        (None, None) => None,
     };
-    let img = match &scalars {
-        Some(d) => {
-            let scale = ColorScale::auto(d)?;
-            render::render_mesh(&mesh, Some((d, scale)), &lines, &opts)?
-        }
+    let mut opts = opts;
+    if a.deviation.is_some() {
+        opts.legend_title = "point deviation".into();
+    }
+    let img = match scalars {
+        Some((d, scale)) => render::render_mesh(&mesh, Some((&d, scale)), &lines, &opts)?,
         None => render::render_mesh(&mesh, None, &lines, &opts)?,
     };
     img.save_png(&a.output)?;

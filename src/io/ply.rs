@@ -718,6 +718,77 @@ pub fn write_scalar_cloud(
     Ok(())
 }
 
+/// Reads back points with a scalar per point, as [`write_scalar_cloud`] writes them (a
+/// `fit --deviation-ply` file): a binary PLY whose first element is `vertex`, of scalar
+/// properties only, with `x`, `y`, `z` and the scalar property `name` (e.g. `quality`). Other
+/// properties are skipped; ASCII files, list properties or a missing property are refused.
+pub fn read_scalar_cloud(path: &Path, name: &str) -> Result<(Vec<Point3<f64>>, Vec<f64>)> {
+    let bytes = super::read_bytes(path)?;
+    let h = parse_header(path, &bytes)?;
+    let be =
+        match h.encoding {
+            Encoding::BinaryLe => false,
+            Encoding::BinaryBe => true,
+            Encoding::Ascii => return Err(Error::unsupported(
+                path,
+                "a per-point scalar is read from binary PLY only (as `fit --deviation-ply` writes)",
+            )),
+        };
+    let el = match h.elements.first() {
+        Some(el) if el.name == "vertex" => el,
+        _ => return Err(Error::content(path, "the first element is not 'vertex'")),
+    };
+    let mut offsets = Vec::with_capacity(el.props.len());
+    let mut row = 0usize;
+    for p in &el.props {
+        let PropKind::Scalar(t) = p.kind else {
+            return Err(Error::unsupported(
+                path,
+                "vertex element with list properties",
+            ));
+        };
+        offsets.push((p.name.as_str(), row, t));
+        row += t.size();
+    }
+    let find = |want: &str| {
+        offsets
+            .iter()
+            .find(|(n, _, _)| *n == want)
+            .map(|&(_, o, t)| (o, t))
+            .ok_or_else(|| Error::content(path, format!("the vertices have no '{want}' property")))
+    };
+    let (x, y, z, q) = (find("x")?, find("y")?, find("z")?, find(name)?);
+    let data = &bytes[h.data_start..];
+    if row == 0 || el.count > data.len() / row {
+        return Err(Error::syntax(
+            path,
+            Location::Byte(h.data_start as u64),
+            format!(
+                "header declares {} vertices of {} bytes but only {} bytes follow (truncated?)",
+                el.count,
+                row,
+                data.len()
+            ),
+        ));
+    }
+    let mut points = Vec::with_capacity(el.count);
+    let mut values = Vec::with_capacity(el.count);
+    for (i, r) in data.chunks_exact(row).take(el.count).enumerate() {
+        let get = |(o, t): (usize, Scalar)| t.read(&r[o..], be);
+        let p = Point3::new(get(x), get(y), get(z));
+        if !p.iter().all(|c| c.is_finite()) {
+            return Err(Error::syntax(
+                path,
+                Location::Byte((h.data_start + i * row) as u64),
+                format!("vertex {i} has a non-finite coordinate"),
+            ));
+        }
+        points.push(p);
+        values.push(get(q));
+    }
+    Ok((points, values))
+}
+
 /// Writes a binary PLY whose triangles are stored as one `tristrips` element (each triangle a
 /// strip of three, separated by -1), as some scanners' software does. For fixtures and tests.
 pub fn write_tristrips(w: &mut dyn Write, mesh: &Mesh, big_endian: bool) -> std::io::Result<()> {
@@ -770,6 +841,31 @@ pub fn write_tristrips(w: &mut dyn Write, mesh: &Mesh, big_endian: bool) -> std:
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn scalar_cloud_round_trip_and_refusals() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = dir.path().join("d.ply");
+        let pts = vec![Point3::new(1.0, -2.0, 0.5), Point3::new(0.25, 3.0, -1.0)];
+        let mut buf = Vec::new();
+        write_scalar_cloud(&mut buf, &pts, &[1e-3, 0.5], &[[1, 2, 3], [4, 5, 6]]).unwrap();
+        std::fs::write(&f, &buf).unwrap();
+        let (p, v) = read_scalar_cloud(&f, "quality").unwrap();
+        assert_eq!(p, pts);
+        assert_eq!(v, vec![1e-3f32 as f64, 0.5]);
+        // A missing property, a truncated body, ASCII: errors that name the file.
+        let e = read_scalar_cloud(&f, "confidence").unwrap_err().to_string();
+        assert!(e.contains("d.ply") && e.contains("confidence"), "{e}");
+        std::fs::write(&f, &buf[..buf.len() - 5]).unwrap();
+        let e = read_scalar_cloud(&f, "quality").unwrap_err().to_string();
+        assert!(e.contains("truncated"), "{e}");
+        std::fs::write(
+            &f,
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n",
+        )
+        .unwrap();
+        assert!(read_scalar_cloud(&f, "quality").is_err());
+    }
 
     fn p() -> &'static Path {
         Path::new("t.ply")

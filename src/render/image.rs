@@ -22,6 +22,9 @@ pub struct ImageStats {
     pub grey_levels: usize,
     /// Fraction of the foreground whose channels differ by more than 40 (clearly coloured).
     pub colored_fraction: f64,
+    /// Fraction of the foreground darker than luma 64: outlines and drawn lines (patch
+    /// boundaries), which shaded surfaces under the default lights do not reach.
+    pub dark_fraction: f64,
 }
 
 impl Image {
@@ -125,6 +128,7 @@ impl Image {
     pub fn stats(&self, background: [u8; 3]) -> ImageStats {
         let mut fg = 0usize;
         let mut colored = 0usize;
+        let mut dark = 0usize;
         let mut levels = [false; 256];
         for p in &self.pixels {
             if *p == background {
@@ -132,20 +136,22 @@ impl Image {
             }
             fg += 1;
             let [r, g, b] = p.map(|c| c as u32);
-            levels[((299 * r + 587 * g + 114 * b + 500) / 1000) as usize] = true;
+            let luma = (299 * r + 587 * g + 114 * b + 500) / 1000;
+            levels[luma as usize] = true;
+            if luma < 64 {
+                dark += 1;
+            }
             if r.max(g).max(b) - r.min(g).min(b) > 40 {
                 colored += 1;
             }
         }
         let n = self.pixels.len().max(1) as f64;
+        let of_fg = |k: usize| if fg == 0 { 0.0 } else { k as f64 / fg as f64 };
         ImageStats {
             foreground_fraction: fg as f64 / n,
             grey_levels: levels.iter().filter(|&&l| l).count(),
-            colored_fraction: if fg == 0 {
-                0.0
-            } else {
-                colored as f64 / fg as f64
-            },
+            colored_fraction: of_fg(colored),
+            dark_fraction: of_fg(dark),
         }
     }
 }
@@ -168,6 +174,10 @@ mod tests {
         assert!((s.foreground_fraction - 13.0 / 35.0).abs() < 1e-12);
         assert_eq!(s.grey_levels, 2);
         assert!((s.colored_fraction - 6.0 / 13.0).abs() < 1e-12);
+        assert_eq!(s.dark_fraction, 0.0);
+        img.fill_rect(0, 0, 1, 1, [20, 24, 40]);
+        let s = img.stats([255, 255, 255]);
+        assert!((s.dark_fraction - 1.0 / 14.0).abs() < 1e-12);
         assert!(img.save_png(&dir.path().join("no/such/dir.png")).is_err());
         assert!(!img.encode_png().unwrap().is_empty());
     }

@@ -152,9 +152,37 @@ pub fn network_preview(
     let Some(dev) = dev else {
         return render_mesh(&mesh, None, &lines, opts);
     };
-    let mut finite: Vec<f64> = dev.iter().copied().filter(|v| v.is_finite()).collect();
-    if finite.is_empty() {
+    let Some((scalars, scale)) = point_deviation_colours(&mesh.positions, points, dev)? else {
         return render_mesh(&mesh, None, &lines, opts);
+    };
+    let mut o = opts.clone();
+    o.legend_title = "point deviation".into();
+    render_mesh(&mesh, Some((&scalars, scale)), &lines, &o)
+}
+
+/// Per-vertex scalars and their colour scale for a surface coloured by the deviation of nearby
+/// input points: each vertex of `surface` takes `deviation[k]` of its nearest point
+/// `points[k]`; the scale runs from 0 to the 99th percentile of the finite deviations, so a few
+/// outliers do not wash it out. `None` when no deviation is finite.
+pub fn point_deviation_colours(
+    surface: &[Point3<f64>],
+    points: &[Point3<f64>],
+    deviation: &[f64],
+) -> Result<Option<(Vec<f64>, ColorScale)>> {
+    if points.is_empty() || deviation.len() != points.len() {
+        return Err(Error::Degenerate(format!(
+            "{} deviation values for {} points",
+            deviation.len(),
+            points.len()
+        )));
+    }
+    let mut finite: Vec<f64> = deviation
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .collect();
+    if finite.is_empty() {
+        return Ok(None);
     }
     finite.sort_unstable_by(f64::total_cmp);
     let p99 = finite[((finite.len() - 1) as f64 * 0.99).round() as usize];
@@ -163,10 +191,7 @@ pub fn network_preview(
     } else {
         ColorScale::auto(&finite)?
     };
-    let scalars = nearest_values(&mesh.positions, points, dev)?;
-    let mut o = opts.clone();
-    o.legend_title = "point deviation".into();
-    render_mesh(&mesh, Some((&scalars, scale)), &lines, &o)
+    Ok(Some((nearest_values(surface, points, deviation)?, scale)))
 }
 
 /// For every query point, `values[k]` of its nearest point `points[k]` (k-d tree).

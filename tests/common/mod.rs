@@ -12,8 +12,13 @@ pub fn checker() -> Option<(PathBuf, PathBuf)> {
     let python = [repo.join(".venv-check/bin/python")]
         .into_iter()
         .find(|p| p.exists());
-    let script = [repo.join("../shared/tools/cad_check.py")]
+    // `$SCANSURF_SHARED_DATA/../tools` when the shared data lives elsewhere (see
+    // tests/support/mod.rs), else `../shared/tools` beside the crate.
+    let shared_tools = std::env::var_os("SCANSURF_SHARED_DATA")
+        .map(|d| PathBuf::from(d).join("../tools/cad_check.py"));
+    let script = shared_tools
         .into_iter()
+        .chain([repo.join("../shared/tools/cad_check.py")])
         .find(|p| p.exists());
     match (python, script) {
         (Some(p), Some(s)) => Some((p, s)),
