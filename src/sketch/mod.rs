@@ -99,6 +99,10 @@ pub struct SketchReport {
     /// Projected mesh area / drawing area, and intersection over union (rasterised, 256^2).
     pub silhouette_area_ratio: f64,
     pub silhouette_iou: f64,
+    /// Smallest distance between the surfaces of overlapping parts (drawing units; null
+    /// without overlaps), and the constraint gap that gave it (fraction of the diagonal).
+    pub surface_gap: Option<f64>,
+    pub constraint_gap: f64,
     pub seconds: f64,
 }
 
@@ -146,7 +150,79 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
         .iter()
         .map(|p| chordal_axis::chordal_axis(p, opts.skeleton_spacing))
         .collect::<Result<_>>()?;
-    let sk3 = skeleton3d::solve(&skels, &an.overlaps, &opts.weights, opts.min_gap)?;
+    // d_MinSurf holds at the skeleton vertices (eq. 3); the blended surfaces between them can
+    // come closer. Measure the real gap on the mesh and, where it falls short, solve again with
+    // the constraint gap widened by the shortfall (at most GAP_ROUNDS times).
+    let mut gap = opts.min_gap;
+    let mut built = build_volume(&an, &skels, opts, gap, diag, center)?;
+    let mut surface_gap = part_gap(&built.mesh, &built.f, &an.overlaps);
+    for _ in 0..GAP_ROUNDS {
+        if surface_gap >= opts.min_gap * (1.0 - 1e-3) {
+            break;
+        }
+        gap += 1.5 * (opts.min_gap - surface_gap);
+        built = build_volume(&an, &skels, opts, gap, diag, center)?;
+        surface_gap = part_gap(&built.mesh, &built.f, &an.overlaps);
+    }
+    let Built {
+        mut mesh,
+        sk3,
+        part_reports,
+        ..
+    } = built;
+    let (area_ratio, iou) = silhouette_match(&an.parts, &mesh);
+    for p in &mut mesh.positions {
+        *p = Point3::new(p.x * diag + center.x, p.y * diag + center.y, p.z * diag);
+    }
+    mesh.normals = None;
+    let topo = Topology::build(&mesh);
+    let chi = mesh.positions.len() as i64 - topo.edges.len() as i64 + mesh.faces.len() as i64;
+    let comps = topo.components.len() as i64;
+    let report = SketchReport {
+        contours: drawing.contours.len(),
+        crossings: an.crossings,
+        overlaps: an.overlaps.clone(),
+        parts: part_reports,
+        depth_constraints: sk3.constraints,
+        active_constraints: sk3.active,
+        options: opts.clone(),
+        vertices: mesh.positions.len(),
+        faces: mesh.faces.len(),
+        closed_manifold: topo.is_closed_manifold(),
+        components: topo.components.len(),
+        euler_characteristic: chi,
+        genus: (2 * comps - chi) / 2,
+        silhouette_area_ratio: area_ratio,
+        silhouette_iou: iou,
+        surface_gap: surface_gap.is_finite().then_some(surface_gap * diag),
+        constraint_gap: gap,
+        seconds: t0.elapsed().as_secs_f64(),
+    };
+    Ok((mesh, report))
+}
+
+/// Rounds of widening the depth-constraint gap until the surfaces are d_MinSurf apart.
+const GAP_ROUNDS: usize = 3;
+
+/// The volume of the parts and its mesh (normalised units), for one constraint gap.
+struct Built {
+    mesh: Mesh,
+    f: SketchImplicit,
+    sk3: skeleton3d::Skeleton3,
+    part_reports: Vec<PartReport>,
+}
+
+/// Skeleton depths (section 4.4, constraint gap `gap`), sphere blends (section 5) and their
+/// polygonization (marching cubes, relaxation, subdivision as in `reconstruct`).
+fn build_volume(
+    an: &contour::Analysis,
+    skels: &[chordal_axis::Skeleton2],
+    opts: &SketchOptions,
+    gap: f64,
+    diag: f64,
+    center: Point2<f64>,
+) -> Result<Built> {
+    let sk3 = skeleton3d::solve(skels, &an.overlaps, &opts.weights, gap)?;
     if sk3.z.iter().any(|z| !z.is_finite()) {
         return Err(Error::Numerical(
             "the skeleton depths came out non-finite".into(),
@@ -160,7 +236,7 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
     let mut rmax = 0.0f64;
     let mut off = 0;
     let mut part_reports = Vec::new();
-    for (part, sk) in an.parts.iter().zip(&skels) {
+    for (part, sk) in an.parts.iter().zip(skels) {
         let z = &sk3.z[off..off + sk.nodes.len()];
         off += sk.nodes.len();
         let centers: Vec<Point3<f64>> = sk
@@ -258,33 +334,46 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
             t.swap(1, 2);
         }
     }
-    let (area_ratio, iou) = silhouette_match(&an.parts, &mesh);
-    for p in &mut mesh.positions {
-        *p = Point3::new(p.x * diag + center.x, p.y * diag + center.y, p.z * diag);
+    Ok(Built {
+        mesh,
+        f,
+        sk3,
+        part_reports,
+    })
+}
+
+/// Smallest distance between the surfaces of two overlapping parts (normalised units;
+/// infinity without overlaps): every vertex goes to the part whose implicit is lowest there,
+/// and the vertices of each (front, back) pair are compared through a k-d tree.
+fn part_gap(mesh: &Mesh, f: &SketchImplicit, overlaps: &[(usize, usize)]) -> f64 {
+    use rayon::prelude::*;
+    if overlaps.is_empty() || f.parts.len() < 2 {
+        return f64::INFINITY;
     }
-    mesh.normals = None;
-    let topo = Topology::build(&mesh);
-    let chi = mesh.positions.len() as i64 - topo.edges.len() as i64 + mesh.faces.len() as i64;
-    let comps = topo.components.len() as i64;
-    let report = SketchReport {
-        contours: drawing.contours.len(),
-        crossings: an.crossings,
-        overlaps: an.overlaps.clone(),
-        parts: part_reports,
-        depth_constraints: sk3.constraints,
-        active_constraints: sk3.active,
-        options: opts.clone(),
-        vertices: mesh.positions.len(),
-        faces: mesh.faces.len(),
-        closed_manifold: topo.is_closed_manifold(),
-        components: topo.components.len(),
-        euler_characteristic: chi,
-        genus: (2 * comps - chi) / 2,
-        silhouette_area_ratio: area_ratio,
-        silhouette_iou: iou,
-        seconds: t0.elapsed().as_secs_f64(),
-    };
-    Ok((mesh, report))
+    let owner: Vec<usize> = mesh.positions.par_iter().map(|p| f.owner(p)).collect();
+    let mut best = f64::INFINITY;
+    for &(a, b) in overlaps {
+        let pa: Vec<Point3<f64>> = (0..mesh.positions.len())
+            .filter(|&v| owner[v] == a)
+            .map(|v| mesh.positions[v])
+            .collect();
+        let pb: Vec<Point3<f64>> = (0..mesh.positions.len())
+            .filter(|&v| owner[v] == b)
+            .map(|v| mesh.positions[v])
+            .collect();
+        if pa.is_empty() || pb.is_empty() {
+            continue;
+        }
+        let Ok(tree) = crate::spatial::KdTree::build(&pb) else {
+            continue;
+        };
+        let d = pa
+            .par_iter()
+            .map(|p| tree.nearest(p).1)
+            .reduce(|| f64::INFINITY, f64::min);
+        best = best.min(d);
+    }
+    best
 }
 
 /// Rasterises the drawing's regions and the mesh projected on z = 0 on a 256^2 grid over the
