@@ -14,6 +14,7 @@ pub mod chordal_axis;
 pub mod contour;
 pub mod input;
 pub mod lsi;
+pub mod paneling;
 pub mod skeleton3d;
 pub mod volume;
 
@@ -46,6 +47,9 @@ pub struct SketchOptions {
     pub relax_iterations: usize,
     /// At most this many 1-to-4 subdivisions with projection (default 1).
     pub max_subdivisions: usize,
+    /// A contour that crosses itself outlines a folded sheet: put the fold (the doubly
+    /// covered layer) behind the rest instead of in front (default false).
+    pub fold_behind: bool,
 }
 
 impl Default for SketchOptions {
@@ -58,6 +62,7 @@ impl Default for SketchOptions {
             cell: 1.0 / 90.0,
             relax_iterations: 2,
             max_subdivisions: 1,
+            fold_behind: false,
         }
     }
 }
@@ -67,6 +72,8 @@ impl Default for SketchOptions {
 pub struct PartReport {
     /// Index of the drawing contour that outlines it.
     pub contour: usize,
+    /// Layer of a folded (self-crossing) contour, 1 otherwise.
+    pub level: i32,
     pub holes: usize,
     pub skeleton_vertices: usize,
     pub skeleton_edges: usize,
@@ -83,6 +90,8 @@ pub struct PartReport {
 pub struct SketchReport {
     pub contours: usize,
     pub crossings: usize,
+    /// Self-crossings of folded contours.
+    pub self_crossings: usize,
     /// (front, back) part pairs.
     pub overlaps: Vec<(usize, usize)>,
     pub parts: Vec<PartReport>,
@@ -144,7 +153,7 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
                 .collect()
         })
         .collect();
-    let an = contour::analyse(&norm, &drawing.over, opts.spacing)?;
+    let an = contour::analyse(&norm, &drawing.over, opts.spacing, opts.fold_behind)?;
     let skels: Vec<chordal_axis::Skeleton2> = an
         .parts
         .iter()
@@ -181,6 +190,7 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
     let report = SketchReport {
         contours: drawing.contours.len(),
         crossings: an.crossings,
+        self_crossings: an.self_crossings,
         overlaps: an.overlaps.clone(),
         parts: part_reports,
         depth_constraints: sk3.constraints,
@@ -269,6 +279,7 @@ fn build_volume(
             / part.outer.len() as f64;
         part_reports.push(PartReport {
             contour: part.contour,
+            level: part.level,
             holes: part.holes.len(),
             skeleton_vertices: sk.nodes.len(),
             skeleton_edges: sk.edges.len(),
