@@ -11,6 +11,7 @@
 //! and mapped back at the end; the viewer looks down the -z axis, so "in front" is larger z.
 
 pub mod chordal_axis;
+pub mod completion;
 pub mod contour;
 pub mod input;
 pub mod lsi;
@@ -92,6 +93,11 @@ pub struct SketchReport {
     pub crossings: usize,
     /// Self-crossings of folded contours.
     pub self_crossings: usize,
+    /// Open strokes ending on closed contours, and the contours completed from them (after
+    /// the closed ones in the contour numbering), with the matchings searched.
+    pub t_junctions: usize,
+    pub completed: Vec<completion::Completed>,
+    pub completion_search: usize,
     /// (front, back) part pairs.
     pub overlaps: Vec<(usize, usize)>,
     pub parts: Vec<PartReport>,
@@ -112,6 +118,8 @@ pub struct SketchReport {
     /// without overlaps), and the constraint gap that gave it (fraction of the diagonal).
     pub surface_gap: Option<f64>,
     pub constraint_gap: f64,
+    /// Diagonal of the drawing's bounding box (the unit of the fractional options).
+    pub drawing_diagonal: f64,
     pub seconds: f64,
 }
 
@@ -131,7 +139,13 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
         }
     }
     let t0 = Instant::now();
-    let all: Vec<Point2<f64>> = drawing.contours.iter().flatten().copied().collect();
+    let all: Vec<Point2<f64>> = drawing
+        .contours
+        .iter()
+        .chain(&drawing.strokes)
+        .flatten()
+        .copied()
+        .collect();
     let (lo, hi) = all.iter().fold(
         (
             Point2::new(f64::MAX, f64::MAX),
@@ -153,7 +167,23 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
                 .collect()
         })
         .collect();
-    let an = contour::analyse(&norm, &drawing.over, opts.spacing, opts.fold_behind)?;
+    // Occluded contours: open strokes ending on closed contours are completed behind them
+    // (T-junctions, section 3.2), and the occluders go in front of the completed contours.
+    let strokes: Vec<Vec<Point2<f64>>> = drawing
+        .strokes
+        .iter()
+        .map(|c| {
+            c.iter()
+                .map(|p| Point2::from((p - center) / diag))
+                .collect()
+        })
+        .collect();
+    let done = completion::complete(&norm, &strokes, opts.spacing)?;
+    let mut norm = norm;
+    norm.extend(done.contours.iter().cloned());
+    let mut over = drawing.over.clone();
+    over.extend(done.over.iter().copied());
+    let an = contour::analyse(&norm, &over, opts.spacing, opts.fold_behind)?;
     let skels: Vec<chordal_axis::Skeleton2> = an
         .parts
         .iter()
@@ -191,6 +221,9 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
         contours: drawing.contours.len(),
         crossings: an.crossings,
         self_crossings: an.self_crossings,
+        t_junctions: 2 * drawing.strokes.len(),
+        completed: done.completed.clone(),
+        completion_search: done.searched,
         overlaps: an.overlaps.clone(),
         parts: part_reports,
         depth_constraints: sk3.constraints,
@@ -206,6 +239,7 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
         silhouette_iou: iou,
         surface_gap: surface_gap.is_finite().then_some(surface_gap * diag),
         constraint_gap: gap,
+        drawing_diagonal: diag,
         seconds: t0.elapsed().as_secs_f64(),
     };
     Ok((mesh, report))
@@ -476,7 +510,7 @@ mod tests {
     fn blob_gives_one_closed_sphere_like_mesh() {
         let d = Drawing {
             contours: vec![ellipse(0.0, 0.0, 50.0, 30.0)],
-            over: vec![],
+            ..Default::default()
         };
         let (m, r) = sketch(&d, &SketchOptions::default()).unwrap();
         assert!(r.closed_manifold, "{r:?}");
