@@ -269,17 +269,22 @@ fn bad_drawings_fail_with_a_message() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("1e3"));
 }
 
-#[test]
-fn blob_to_step_through_the_fit_pipeline() {
+/// `sketch -o X.step`: through the fit pipeline to STEP; OpenCASCADE reads one valid, closed
+/// shell.
+fn step_is_one_closed_valid_shell(name: &str) {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("blob.step");
+    let out = dir.path().join("out.step");
     let o = Command::new(env!("CARGO_BIN_EXE_scansurf"))
-        .args(["sketch", fixture("blob.svg").to_str().unwrap(), "-o"])
+        .args(["sketch", fixture(name).to_str().unwrap(), "-o"])
         .arg(&out)
         .args(["--patches", "200", "--quiet"])
         .output()
         .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        o.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let text = std::fs::read_to_string(&out).unwrap();
     assert!(text.starts_with("ISO-10303-21;"));
     assert!(text.contains("CLOSED_SHELL"));
@@ -288,8 +293,19 @@ fn blob_to_step_through_the_fit_pipeline() {
         return;
     };
     let v = common::cad_check(&python, &script, &out, None);
-    assert_eq!(v["read_ok"], true, "{v}");
-    assert_eq!(v["valid"], true, "{v}");
-    assert_eq!(v["closed"], true, "{v}");
-    assert_eq!(v["shells"].as_u64(), Some(1), "{v}");
+    assert_eq!(v["read_ok"], true, "{name}: {v}");
+    assert_eq!(v["valid"], true, "{name}: {v}");
+    assert_eq!(v["closed"], true, "{name}: {v}");
+    assert_eq!(v["shells"].as_u64(), Some(1), "{name}: {v}");
+}
+
+#[test]
+fn blob_to_step_through_the_fit_pipeline() {
+    step_is_one_closed_valid_shell("blob.svg");
+}
+
+#[test]
+fn ring_to_step_is_a_valid_closed_shell() {
+    // Acceptance of issue 5: the ring (genus 1) as STEP passes cad_check valid, closed.
+    step_is_one_closed_valid_shell("ring.svg");
 }

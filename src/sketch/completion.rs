@@ -63,6 +63,13 @@ pub struct Completion {
     pub searched: usize,
 }
 
+/// Per junction pair: the completion's energy and samples (None: invalid pair).
+type PairTable = Vec<Vec<Option<(f64, Vec<Point2<f64>>)>>>;
+
+/// An assembled contour: points, strokes (index, backwards), energy, hidden length, largest
+/// turn at a junction.
+type Assembled = (Vec<Point2<f64>>, Vec<(usize, bool)>, f64, f64, f64);
+
 /// A T-junction: a stroke end, its position and outward unit tangent.
 #[derive(Debug, Clone, Copy)]
 struct Junction {
@@ -229,7 +236,7 @@ pub fn complete(
             })
             .collect()
     };
-    let mut pair: Vec<Vec<Option<(f64, Vec<Point2<f64>>)>>> = vec![vec![None; m]; m];
+    let mut pair: PairTable = vec![vec![None; m]; m];
     for a in 0..m {
         for b in a + 1..m {
             let (ja, jb) = (js[a], js[b]);
@@ -249,7 +256,7 @@ pub fn complete(
     }
     // Branch-and-bound over perfect matchings.
     struct Search<'a> {
-        pair: &'a [Vec<Option<(f64, Vec<Point2<f64>>)>>],
+        pair: &'a PairTable,
         best: Option<(f64, Vec<usize>)>,
         searched: usize,
         valid: &'a dyn Fn(&[usize]) -> bool,
@@ -293,7 +300,7 @@ pub fn complete(
             mate[b] = usize::MAX;
         }
     }
-    let assemble = |mate: &[usize]| -> Vec<(Vec<Point2<f64>>, Vec<(usize, bool)>, f64, f64, f64)> {
+    let assemble = |mate: &[usize]| -> Vec<Assembled> {
         let mut used = vec![false; clean.len()];
         let mut out = Vec::new();
         for s0 in 0..clean.len() {

@@ -274,7 +274,7 @@ fn build_volume(
     }
 
     // Spherical implicits per part, fitted to the silhouette (section 5).
-    let mut blends = Vec::with_capacity(skels.len());
+    let mut jobs = Vec::with_capacity(skels.len());
     let mut seeds = Vec::new();
     let mut centers_all = Vec::new();
     let mut rmax = 0.0f64;
@@ -335,14 +335,22 @@ fn build_volume(
                 seeds.push(c + (q - c) * (k as f64 / 8.0));
             }
         }
-        let blend = volume::SphereBlend::fit(centers, &sk.radius, &sil)?;
+        jobs.push((centers, &sk.radius, sil));
+    }
+    // The parts' fits are independent: in parallel (each one is sequential, so the result
+    // does not depend on the thread count).
+    let blends: Vec<volume::SphereBlend> = {
+        use rayon::prelude::*;
+        jobs.into_par_iter()
+            .map(|(centers, radius, sil)| volume::SphereBlend::fit(centers, radius, &sil))
+            .collect::<Result<_>>()?
+    };
+    for (k, blend) in blends.iter().enumerate() {
         if blend.weights.iter().any(|w| !w.is_finite()) || blend.weights.iter().all(|w| *w <= 0.0) {
             return Err(Error::Numerical(format!(
-                "the sphere weights of part {} did not fit the silhouette",
-                blends.len()
+                "the sphere weights of part {k} did not fit the silhouette"
             )));
         }
-        blends.push(blend);
     }
     let f = SketchImplicit { parts: blends };
 
