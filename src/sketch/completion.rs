@@ -1,4 +1,5 @@
-//! Completion of occluded contours at T-junctions (seed 001 section 3.2, after Williams):
+//! Completion of occluded contours at T-junctions (seed 001 section 3, "contour completion",
+//! after Williams [19]; the section has no numbered equations):
 //! an open stroke whose ends touch a closed contour is the visible part of an object that goes
 //! on behind that contour. Each stroke end is a T-junction with an outward tangent t (the
 //! direction the stroke leaves the picture in); the hidden contour joins two ends a, b by the
@@ -7,7 +8,8 @@
 //!   H(u) = h00(u) p_a + h10(u) L t_a + h01(u) p_b - h11(u) L t_b,  u in [0, 1],
 //!
 //! (h00 = 2u^3 - 3u^2 + 1, h10 = u^3 - 2u^2 + u, h01 = -2u^3 + 3u^2, h11 = u^3 - u^2), which
-//! matches position and tangent direction at both junctions (G1). Its cost is the paper's
+//! matches position and tangent direction at both junctions (G1); it is the paper's cubic
+//! Bezier segment with control points p_a + L t_a / 3 and p_b + L t_b / 3. Its cost is the paper's
 //! length-and-curvature energy E = int (1 + alpha kappa^2) ds (alpha = [`CURVATURE_LENGTH`]^2
 //! in units of the drawing's diagonal), sampled at 64 points; the tangent magnitude L is the
 //! one of L = k |p_b - p_a|, k in 0.5..3, with the least E (short curves for small k, tight
@@ -16,8 +18,9 @@
 //! Which ends join is a perfect matching of the junctions (a stroke may close on itself, or
 //! two strokes may be the visible pieces of one object); it is chosen by a branch-and-bound
 //! over matchings in order of increasing pair energy, pruned by the best total so far, that
-//! rejects topologically invalid labelings (Williams' constraints, as far as they apply to
-//! closed drawn occluders): a completion must be hidden (every sample inside some closed
+//! rejects topologically invalid labelings. The paper checks a candidate set with Williams'
+//! integer linear program on the crossing counts and depth labels; here, with closed drawn
+//! occluders only, the same constraints reduce to explicit tests: a completion must be hidden (every sample inside some closed
 //! contour, which then lies in front of the completed one: depth changes only at the
 //! T-junctions), completions may not cross each other or the visible strokes, and every
 //! completed contour must be a simple closed curve. The depth labels follow: each closed

@@ -1,4 +1,7 @@
-//! Paneling of a self-overlapping contour (seed 001 section 3.3, after Williams' paneling):
+//! Paneling of a self-overlapping contour (seed 001 sections 3 and 4.2, Williams' paneling
+//! [19]; the paper cuts the closed curves at their crossings into segments labelled with the
+//! number of surfaces hiding them, and stacks panels with depth index = number of panels
+//! between the viewer and the panel, which drives the no-collision pairs of eq. 2-3):
 //! a closed stroke that crosses itself, such as a tail curled over its own body drawn as one
 //! curve, is the outline of a folded (immersed) sheet. Its planar arrangement splits the
 //! stroke at the self-crossings into arcs; the region to the left of an arc (the stroke is
@@ -10,7 +13,8 @@
 //! Layer 1 is the whole silhouette; layer 2 the doubly covered region (where the fold lies over
 //! the body), and so on. Each layer loop becomes a panel of its own; a higher layer overlaps
 //! the lower ones and by default lies in front (the fold over the body, as in the paper's
-//! figure 1 tail); `fold_behind` puts it behind. The depth label of every crossing follows:
+//! figure 1 tail; the fold gets depth index 0, the body under it 1); `fold_behind` puts it
+//! behind. The depth label of every crossing follows:
 //! the branch that bounds the higher layer is over. Clockwise loops of a level are holes of
 //! that layer (the uncovered region a curled tail encloses with the body); a clockwise loop
 //! with no layer around it (a sheet turned over, negative winding) is rejected.
