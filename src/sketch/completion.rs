@@ -215,6 +215,11 @@ pub fn complete(
             MAX_JUNCTIONS
         )));
     }
+    if let Some(k) = strokes.iter().position(|s| s.len() < 2) {
+        return Err(Error::Degenerate(format!(
+            "open stroke {k} has fewer than 2 points"
+        )));
+    }
     let clean: Vec<Vec<Point2<f64>>> = strokes.iter().map(|s| clean_stroke(s, spacing)).collect();
     let mut js = Vec::new();
     for (k, s) in clean.iter().enumerate() {

@@ -90,6 +90,12 @@ pub fn parse_drawing(path: &Path, bytes: Vec<u8>) -> Result<Drawing> {
     );
     let tol = JUNCTION_TOLERANCE * (hi - lo).norm();
     for (s, msg) in open.into_iter().zip(messages) {
+        if s.iter().any(|p| !(p.x.is_finite() && p.y.is_finite())) {
+            return Err(Error::content(
+                path,
+                "an open stroke has a non-finite coordinate",
+            ));
+        }
         let touches = |p: &Point2<f64>| d.contours.iter().any(|c| distance_to_loop(c, p) <= tol);
         match (s.first(), s.last()) {
             (Some(a), Some(b)) if s.len() >= 2 && touches(a) && touches(b) => d.strokes.push(s),
@@ -624,6 +630,20 @@ mod tests {
         assert_eq!(d.contours.len(), 2);
         assert_eq!(d.contours[0].len(), 17);
         assert_eq!(d.over, vec![(1, 0)]);
+    }
+
+    #[test]
+    fn open_stroke_ending_on_a_contour_is_a_t_junction_stroke() {
+        let d = svg(r#"<path d="M0 0 L10 0 L10 10 L0 10 Z"/><polyline points="5,0 5,-20 15,-20 15,5 10,5"/>"#)
+            .unwrap();
+        assert_eq!(d.contours.len(), 1);
+        assert_eq!(d.strokes.len(), 1);
+        assert_eq!(d.strokes[0].len(), 5);
+        // An open stroke with a free end is still an error.
+        let e =
+            svg(r#"<path d="M0 0 L10 0 L10 10 L0 10 Z"/><polyline points="5,0 5,-20 15,-20"/>"#)
+                .unwrap_err();
+        assert!(e.to_string().contains("open"), "{e}");
     }
 
     #[test]

@@ -356,6 +356,37 @@ mod tests {
     }
 
     #[test]
+    fn random_scribbles_give_layers_or_an_error_never_a_panic() {
+        // Deterministic pseudo-random closed polygons (star-like, often self-crossing).
+        let mut seed = 0x2545f4914f6cdd1du64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut ok = 0;
+        for _ in 0..200 {
+            let n = 5 + (rnd() * 20.0) as usize;
+            let c: Vec<Point2<f64>> = (0..n)
+                .map(|_| Point2::new(rnd() - 0.5, rnd() - 0.5))
+                .collect();
+            let mut r = super::super::contour::resample(&c, 60);
+            if signed_area(&r) < 0.0 {
+                r.reverse();
+            }
+            if let Ok((ls, _)) = layers(&r, 0.02) {
+                ok += 1;
+                for l in &ls {
+                    assert!(l.level >= 1 && l.outline.len() >= 3);
+                    assert!(signed_area(&l.outline) > 0.0);
+                }
+            }
+        }
+        assert!(ok > 0);
+    }
+
+    #[test]
     fn simple_contour_is_its_own_layer() {
         let c: Vec<Point2<f64>> = (0..50)
             .map(|i| {
