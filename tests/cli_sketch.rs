@@ -46,7 +46,8 @@ fn run(name: &str) -> (scansurf::Mesh, serde_json::Value) {
 }
 
 /// Vertices of each mesh component, matched to the report's parts by the nearest centroid
-/// (one component per part where parts overlap: the depth gap keeps them apart).
+/// and mean depth (one component per part where parts overlap: the depth gap keeps them
+/// apart; a rod behind a bar has the bar's centroid, but not its depth).
 fn part_vertices(name: &str, m: &scansurf::Mesh, r: &serde_json::Value) -> Vec<Vec<[f64; 3]>> {
     let t = m.topology();
     let parts = r["parts"].as_array().unwrap();
@@ -58,22 +59,29 @@ fn part_vertices(name: &str, m: &scansurf::Mesh, r: &serde_json::Value) -> Vec<V
         }
     }
     let nc = t.components.len();
-    let mut sum = vec![[0.0f64; 3]; nc];
+    let mut sum = vec![[0.0f64; 4]; nc];
     for (v, p) in m.positions.iter().enumerate() {
         let c = comp_of_vertex[v];
         sum[c][0] += p.x;
         sum[c][1] += p.y;
-        sum[c][2] += 1.0;
+        sum[c][2] += p.z;
+        sum[c][3] += 1.0;
     }
     let mut out = vec![Vec::new(); parts.len()];
     let mut part_of_comp = vec![0; nc];
     for c in 0..nc {
-        let (x, y) = (sum[c][0] / sum[c][2], sum[c][1] / sum[c][2]);
+        let (x, y, z) = (
+            sum[c][0] / sum[c][3],
+            sum[c][1] / sum[c][3],
+            sum[c][2] / sum[c][3],
+        );
         part_of_comp[c] = (0..parts.len())
             .min_by(|&a, &b| {
                 let d = |k: usize| {
                     let q = &parts[k]["centroid"];
-                    (q[0].as_f64().unwrap() - x).powi(2) + (q[1].as_f64().unwrap() - y).powi(2)
+                    (q[0].as_f64().unwrap() - x).powi(2)
+                        + (q[1].as_f64().unwrap() - y).powi(2)
+                        + (parts[k]["mean_z"].as_f64().unwrap() - z).powi(2)
                 };
                 d(a).total_cmp(&d(b))
             })
@@ -267,6 +275,20 @@ fn bad_drawings_fail_with_a_message() {
         .unwrap();
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("1e3"));
+}
+
+#[test]
+fn two_visible_pieces_behind_a_bar_are_matched_into_one_rod() {
+    // Four T-junctions; the branch-and-bound over matchings joins the pieces across the bar
+    // (two straight completions) rather than closing each piece on itself.
+    let (m, r) = run("rod_behind_bar.svg");
+    assert_eq!(r["t_junctions"], 4);
+    let done = r["completed"].as_array().unwrap();
+    assert_eq!(done.len(), 1, "{done:?}");
+    assert_eq!(done[0]["strokes"].as_array().unwrap().len(), 2);
+    assert_eq!(r["overlaps"][0], serde_json::json!([0, 1]));
+    assert_eq!(m.topology().components.len(), 2);
+    check_depth_order("rod_behind_bar.svg", &m, &r);
 }
 
 /// `sketch -o X.step`: through the fit pipeline to STEP; OpenCASCADE reads one valid, closed
