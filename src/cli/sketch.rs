@@ -27,6 +27,10 @@ pub struct Args {
     /// Write the report (parts, depths, constraints, topology, silhouette match) as JSON here.
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// A contour that crosses itself (a fold, e.g. a tail curled over the body drawn as one
+    /// curve): put the doubly covered layer behind the rest instead of in front.
+    #[arg(long)]
+    pub fold_behind: bool,
     /// Write PLY/STL as text.
     #[arg(long)]
     pub ascii: bool,
@@ -73,6 +77,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         weights: parse_weights(&a.weights)?,
         min_gap: a.min_gap,
         cell: a.cell,
+        fold_behind: a.fold_behind,
         ..SketchOptions::default()
     };
     let drawing = read_drawing(&a.input)?;

@@ -277,7 +277,7 @@ mod tests {
 
     #[test]
     fn ellipse_axis_is_a_chain_along_the_major_axis() {
-        let an = analyse(&[ellipse(4.0, 1.0, 200)], &[], 0.1).unwrap();
+        let an = analyse(&[ellipse(4.0, 1.0, 200)], &[], 0.1, false).unwrap();
         let sk = chordal_axis(&an.parts[0], 0.3).unwrap();
         assert!(sk.nodes.len() > 8, "{}", sk.nodes.len());
         // A tree (no cycle) close to y = 0 with radii up to the minor axis.
@@ -292,7 +292,7 @@ mod tests {
     fn ring_axis_is_a_cycle() {
         let mut inner = ellipse(1.0, 1.0, 80);
         inner.iter_mut().for_each(|p| *p = Point2::new(p.x, p.y));
-        let an = analyse(&[ellipse(2.0, 2.0, 160), inner], &[], 0.08).unwrap();
+        let an = analyse(&[ellipse(2.0, 2.0, 160), inner], &[], 0.08, false).unwrap();
         let sk = chordal_axis(&an.parts[0], 0.3).unwrap();
         assert_eq!(sk.edges.len(), sk.nodes.len(), "one cycle");
         for (p, r) in sk.nodes.iter().zip(&sk.radius) {

@@ -3,11 +3,11 @@
 //! contour inside another without crossing it is a hole), and the panels ("parts") with their
 //! pairwise depth order.
 //!
-//! Simplification of the paper's section 3.2-3.3 (stated in the module report): contours are
-//! drawn closed, so no T-junction completion is needed; a contour that crosses another is its
-//! own panel, and where two panels overlap the depth order comes from the drawing (document
-//! order or the explicit `over` pairs) instead of a branch-and-bound over completions. A contour
-//! that crosses itself is rejected with the crossing point in the message.
+//! Simplification of the paper's section 3.2-3.3 (stated in the module report): a contour that
+//! crosses another is its own panel, and where two panels overlap the depth order comes from
+//! the drawing (document order or the explicit `over` pairs). A contour that crosses itself
+//! is split into the layers of the folded sheet it outlines ([`super::paneling`]), each layer
+//! a panel, the higher layer in front by default.
 
 use crate::error::{Error, Result};
 use nalgebra::Point2;
@@ -138,6 +138,8 @@ pub fn crossings(a: &[Point2<f64>], b: &[Point2<f64>], same: bool) -> Vec<Point2
 #[derive(Debug, Clone)]
 pub struct Part {
     pub contour: usize,
+    /// Layer of a self-overlapping contour (1 for an ordinary one; [`super::paneling`]).
+    pub level: i32,
     pub outer: Vec<Point2<f64>>,
     pub holes: Vec<Vec<Point2<f64>>>,
 }
@@ -163,15 +165,25 @@ pub struct Analysis {
     pub spacing: f64,
     /// Crossing points found between contours.
     pub crossings: usize,
+    /// Self-crossings of folded contours (each one splits the stroke into layers).
+    pub self_crossings: usize,
 }
 
 /// Cleans the contours and builds panels. `spacing` is the resampling step (absolute).
+/// A contour that crosses itself is split into its layers ([`super::paneling`]); a higher
+/// layer lies in front of the lower ones unless `fold_behind`.
 pub fn analyse(
     contours: &[Vec<Point2<f64>>],
     over: &[(usize, usize)],
     spacing: f64,
+    fold_behind: bool,
 ) -> Result<Analysis> {
+    // Cleaned loops with the drawing contour they came from and their layer.
     let mut clean: Vec<Vec<Point2<f64>>> = Vec::with_capacity(contours.len());
+    let mut origin: Vec<usize> = Vec::with_capacity(contours.len());
+    let mut level: Vec<i32> = Vec::with_capacity(contours.len());
+    let mut layer_holes: Vec<Vec<Vec<Point2<f64>>>> = Vec::with_capacity(contours.len());
+    let mut self_crossings = 0;
     for (k, c) in contours.iter().enumerate() {
         let len = perimeter(c);
         let area = signed_area(c).abs();
@@ -186,13 +198,15 @@ pub fn analyse(
         if signed_area(&r) < 0.0 {
             r.reverse();
         }
-        if let Some(p) = crossings(&r, &r, true).first() {
-            return Err(Error::Degenerate(format!(
-                "contour {k} crosses itself near ({:.3}, {:.3}); self-overlapping contours are not supported, draw the overlapping parts as separate closed curves",
-                p.x, p.y
-            )));
+        let (layers, nx) = super::paneling::layers(&r, spacing)
+            .map_err(|e| Error::Degenerate(format!("contour {k}: {e}")))?;
+        self_crossings += nx;
+        for l in layers {
+            clean.push(l.outline);
+            layer_holes.push(l.holes);
+            origin.push(k);
+            level.push(l.level);
         }
-        clean.push(r);
     }
     let n = clean.len();
     // Pairwise relations: crossing, or nesting.
@@ -200,6 +214,12 @@ pub fn analyse(
     let mut ncross = 0;
     for i in 0..n {
         for j in i + 1..n {
+            if origin[i] == origin[j] {
+                // Layers of one folded contour overlap (they touch at the crossings).
+                cross[i][j] = true;
+                cross[j][i] = true;
+                continue;
+            }
             let c = crossings(&clean[i], &clean[j], false).len();
             ncross += c;
             cross[i][j] = c > 0;
@@ -217,9 +237,10 @@ pub fn analyse(
         if depth[k].is_multiple_of(2) {
             part_of[k] = parts.len();
             parts.push(Part {
-                contour: k,
+                contour: origin[k],
+                level: level[k],
                 outer: clean[k].clone(),
-                holes: Vec::new(),
+                holes: layer_holes[k].clone(),
             });
         }
     }
@@ -250,20 +271,31 @@ pub fn analyse(
     for a in 0..parts.len() {
         for b in a + 1..parts.len() {
             let (ka, kb) = (parts[a].contour, parts[b].contour);
-            let touching = parts[a].loops().any(|la| {
-                parts[b]
-                    .loops()
-                    .any(|lb| !crossings(la, lb, false).is_empty())
-            });
+            let same = ka == kb;
+            let touching = same
+                || parts[a].loops().any(|la| {
+                    parts[b]
+                        .loops()
+                        .any(|lb| !crossings(la, lb, false).is_empty())
+                });
             let nested =
                 parts[a].contains(&parts[b].outer[0]) || parts[b].contains(&parts[a].outer[0]);
             if !(touching || nested) {
                 continue;
             }
-            // Explicit pairs first (by drawing contour index), else later in front.
+            if same {
+                // Layers of one folded contour: the higher layer (the fold) in front, unless
+                // `fold_behind`.
+                let a_front = (parts[a].level > parts[b].level) != fold_behind;
+                overlaps.push(if a_front { (a, b) } else { (b, a) });
+                continue;
+            }
+            // Explicit pairs first (by drawing contour index, its lowest layer), else later in
+            // front.
+            let part_of_contour = |c: usize| (0..n).find(|&l| origin[l] == c).map(|l| part_of[l]);
             let explicit = over.iter().rev().find_map(|&(f, k)| {
-                let f = part_of.get(f).copied()?;
-                let k = part_of.get(k).copied()?;
+                let f = part_of_contour(f)?;
+                let k = part_of_contour(k)?;
                 if (f, k) == (a, b) {
                     Some((a, b))
                 } else if (f, k) == (b, a) {
@@ -280,6 +312,7 @@ pub fn analyse(
         overlaps,
         spacing,
         crossings: ncross,
+        self_crossings,
     })
 }
 
@@ -314,6 +347,7 @@ mod tests {
             &[circle(0.0, 0.0, 2.0, 50), circle(0.0, 0.0, 1.0, 50)],
             &[],
             0.1,
+            false,
         )
         .unwrap();
         assert_eq!(a.parts.len(), 1);
@@ -324,6 +358,7 @@ mod tests {
             &[circle(0.0, 0.0, 1.0, 50), circle(1.0, 0.0, 1.0, 50)],
             &[],
             0.1,
+            false,
         )
         .unwrap();
         assert_eq!(b.parts.len(), 2);
@@ -332,13 +367,14 @@ mod tests {
             &[circle(0.0, 0.0, 1.0, 50), circle(1.0, 0.0, 1.0, 50)],
             &[(0, 1)],
             0.1,
+            false,
         )
         .unwrap();
         assert_eq!(c.overlaps, vec![(0, 1)]);
     }
 
     #[test]
-    fn self_crossing_contour_is_rejected() {
+    fn self_crossing_contour_gives_layers_in_front() {
         let c: Vec<Point2<f64>> = (0..40)
             .map(|i| {
                 let t = i as f64 / 40.0 * std::f64::consts::TAU;
@@ -347,7 +383,13 @@ mod tests {
                 Point2::new(r * t.cos(), r * t.sin())
             })
             .collect();
-        let e = analyse(&[c], &[], 0.05).unwrap_err();
-        assert!(e.to_string().contains("crosses itself"), "{e}");
+        let a = analyse(std::slice::from_ref(&c), &[], 0.05, false).unwrap();
+        assert_eq!(a.self_crossings, 1);
+        assert_eq!(a.parts.len(), 2);
+        assert_eq!((a.parts[0].level, a.parts[1].level), (1, 2));
+        assert!(a.parts.iter().all(|p| p.contour == 0 && p.holes.is_empty()));
+        assert_eq!(a.overlaps, vec![(1, 0)]);
+        let b = analyse(&[c], &[], 0.05, true).unwrap();
+        assert_eq!(b.overlaps, vec![(0, 1)]);
     }
 }

@@ -19,12 +19,39 @@ use crate::error::{Error, Location, Result};
 use nalgebra::Point2;
 use std::path::Path;
 
-/// A drawing: closed contours (first point not repeated at the end) and depth pairs.
+/// A drawing: closed contours (first point not repeated at the end), depth pairs, and open
+/// strokes whose two ends touch a closed contour (T-junctions: the rest of the stroke is
+/// hidden behind it and is completed by [`super::completion`]).
 #[derive(Debug, Clone, Default)]
 pub struct Drawing {
     pub contours: Vec<Vec<Point2<f64>>>,
     /// (front, back) contour pairs given explicitly; pairs not listed follow document order.
     pub over: Vec<(usize, usize)>,
+    /// Open strokes ending on closed contours (at least 2 points each).
+    pub strokes: Vec<Vec<Point2<f64>>>,
+    /// Open polylines met while parsing, with the error to give if they touch nothing.
+    pub(crate) open: Vec<(Vec<Point2<f64>>, String)>,
+}
+
+/// How far (fraction of the drawing's diagonal) a stroke end may lie from a closed contour to
+/// count as a T-junction on it.
+pub const JUNCTION_TOLERANCE: f64 = 0.02;
+
+/// Distance from `p` to the closed polyline `c`.
+pub fn distance_to_loop(c: &[Point2<f64>], p: &Point2<f64>) -> f64 {
+    let n = c.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (c[i], c[(i + 1) % n]);
+            let ab = b - a;
+            let t = if ab.norm_squared() > 0.0 {
+                ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (a + ab * t - p).norm()
+        })
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// Reads an SVG or JSON drawing (by extension; content sniffing when the extension is neither).
@@ -46,11 +73,35 @@ pub fn parse_drawing(path: &Path, bytes: Vec<u8>) -> Result<Drawing> {
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
-    let d = if ext == "json" || (ext != "svg" && text.trim_start().starts_with('{')) {
+    let mut d = if ext == "json" || (ext != "svg" && text.trim_start().starts_with('{')) {
         parse_json(path, &text)?
     } else {
         parse_svg(path, &text)?
     };
+    // Open strokes are kept only where both ends touch a closed contour (T-junctions).
+    let (open, messages): (Vec<_>, Vec<_>) = std::mem::take(&mut d.open).into_iter().unzip();
+    let all: Vec<Point2<f64>> = d.contours.iter().chain(&open).flatten().copied().collect();
+    let (lo, hi) = all.iter().fold(
+        (
+            Point2::new(f64::MAX, f64::MAX),
+            Point2::new(f64::MIN, f64::MIN),
+        ),
+        |(a, b), p| (a.inf(p), b.sup(p)),
+    );
+    let tol = JUNCTION_TOLERANCE * (hi - lo).norm();
+    for (s, msg) in open.into_iter().zip(messages) {
+        if s.iter().any(|p| !(p.x.is_finite() && p.y.is_finite())) {
+            return Err(Error::content(
+                path,
+                "an open stroke has a non-finite coordinate",
+            ));
+        }
+        let touches = |p: &Point2<f64>| d.contours.iter().any(|c| distance_to_loop(c, p) <= tol);
+        match (s.first(), s.last()) {
+            (Some(a), Some(b)) if s.len() >= 2 && touches(a) && touches(b) => d.strokes.push(s),
+            _ => return Err(Error::content(path, msg)),
+        }
+    }
     if d.contours.is_empty() {
         return Err(Error::content(path, "the drawing has no closed contour"));
     }
@@ -88,11 +139,31 @@ fn parse_json(path: &Path, text: &str) -> Result<Drawing> {
     let mut d = Drawing::default();
     for (k, c) in j.contours.iter().enumerate() {
         let pts: Vec<Point2<f64>> = c.iter().map(|p| Point2::new(p[0], p[1])).collect();
-        d.contours
-            .push(close(path, pts, &format!("contour {k}"), false)?);
+        add_polyline(&mut d, path, pts, &format!("contour {k}"), false)?;
     }
     d.over = j.over.iter().map(|p| (p[0], p[1])).collect();
     Ok(d)
+}
+
+/// A closed polyline goes to the contours; an open one is kept aside (a possible T-junction
+/// stroke, checked once all contours are read) with the "open" error it gets otherwise.
+fn add_polyline(
+    d: &mut Drawing,
+    path: &Path,
+    pts: Vec<Point2<f64>>,
+    what: &str,
+    closed_by_z: bool,
+) -> Result<()> {
+    match close(path, pts.clone(), what, closed_by_z) {
+        Ok(c) => d.contours.push(c),
+        Err(Error::Content { message, .. }) if message.contains("is open") => {
+            let mut p = pts;
+            p.dedup_by(|a, b| (*a - *b).norm() == 0.0);
+            d.open.push((p, message));
+        }
+        Err(e) => return Err(e),
+    }
+    Ok(())
 }
 
 /// Checks that a polyline ends on its first point (or was closed by Z) and drops the repeat.
@@ -272,8 +343,7 @@ fn parse_svg(path: &Path, text: &str) -> Result<Drawing> {
                 let subs = parse_path_data(path, dattr, line_of(text, start))?;
                 let what = format!("<path> at {}", line_of(text, start));
                 for (i, (pts, z)) in subs.into_iter().enumerate() {
-                    d.contours
-                        .push(close(path, pts, &format!("subpath {i} of {what}"), z)?);
+                    add_polyline(&mut d, path, pts, &format!("subpath {i} of {what}"), z)?;
                 }
             }
             "polygon" | "polyline" => {
@@ -295,7 +365,7 @@ fn parse_svg(path: &Path, text: &str) -> Result<Drawing> {
                 let pts: Vec<Point2<f64>> =
                     nums.chunks(2).map(|c| Point2::new(c[0], -c[1])).collect();
                 let what = format!("<{name}> at {}", line_of(text, start));
-                d.contours.push(close(path, pts, &what, name == "polygon")?);
+                add_polyline(&mut d, path, pts, &what, name == "polygon")?;
             }
             _ => {}
         }
@@ -560,6 +630,20 @@ mod tests {
         assert_eq!(d.contours.len(), 2);
         assert_eq!(d.contours[0].len(), 17);
         assert_eq!(d.over, vec![(1, 0)]);
+    }
+
+    #[test]
+    fn open_stroke_ending_on_a_contour_is_a_t_junction_stroke() {
+        let d = svg(r#"<path d="M0 0 L10 0 L10 10 L0 10 Z"/><polyline points="5,0 5,-20 15,-20 15,5 10,5"/>"#)
+            .unwrap();
+        assert_eq!(d.contours.len(), 1);
+        assert_eq!(d.strokes.len(), 1);
+        assert_eq!(d.strokes[0].len(), 5);
+        // An open stroke with a free end is still an error.
+        let e =
+            svg(r#"<path d="M0 0 L10 0 L10 10 L0 10 Z"/><polyline points="5,0 5,-20 15,-20"/>"#)
+                .unwrap_err();
+        assert!(e.to_string().contains("open"), "{e}");
     }
 
     #[test]

@@ -11,9 +11,11 @@
 //! and mapped back at the end; the viewer looks down the -z axis, so "in front" is larger z.
 
 pub mod chordal_axis;
+pub mod completion;
 pub mod contour;
 pub mod input;
 pub mod lsi;
+pub mod paneling;
 pub mod skeleton3d;
 pub mod volume;
 
@@ -46,6 +48,9 @@ pub struct SketchOptions {
     pub relax_iterations: usize,
     /// At most this many 1-to-4 subdivisions with projection (default 1).
     pub max_subdivisions: usize,
+    /// A contour that crosses itself outlines a folded sheet: put the fold (the doubly
+    /// covered layer) behind the rest instead of in front (default false).
+    pub fold_behind: bool,
 }
 
 impl Default for SketchOptions {
@@ -58,6 +63,7 @@ impl Default for SketchOptions {
             cell: 1.0 / 90.0,
             relax_iterations: 2,
             max_subdivisions: 1,
+            fold_behind: false,
         }
     }
 }
@@ -67,6 +73,8 @@ impl Default for SketchOptions {
 pub struct PartReport {
     /// Index of the drawing contour that outlines it.
     pub contour: usize,
+    /// Layer of a folded (self-crossing) contour, 1 otherwise.
+    pub level: i32,
     pub holes: usize,
     pub skeleton_vertices: usize,
     pub skeleton_edges: usize,
@@ -83,6 +91,13 @@ pub struct PartReport {
 pub struct SketchReport {
     pub contours: usize,
     pub crossings: usize,
+    /// Self-crossings of folded contours.
+    pub self_crossings: usize,
+    /// Open strokes ending on closed contours, and the contours completed from them (after
+    /// the closed ones in the contour numbering), with the matchings searched.
+    pub t_junctions: usize,
+    pub completed: Vec<completion::Completed>,
+    pub completion_search: usize,
     /// (front, back) part pairs.
     pub overlaps: Vec<(usize, usize)>,
     pub parts: Vec<PartReport>,
@@ -99,6 +114,12 @@ pub struct SketchReport {
     /// Projected mesh area / drawing area, and intersection over union (rasterised, 256^2).
     pub silhouette_area_ratio: f64,
     pub silhouette_iou: f64,
+    /// Smallest distance between the surfaces of overlapping parts (drawing units; null
+    /// without overlaps), and the constraint gap that gave it (fraction of the diagonal).
+    pub surface_gap: Option<f64>,
+    pub constraint_gap: f64,
+    /// Diagonal of the drawing's bounding box (the unit of the fractional options).
+    pub drawing_diagonal: f64,
     pub seconds: f64,
 }
 
@@ -118,7 +139,13 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
         }
     }
     let t0 = Instant::now();
-    let all: Vec<Point2<f64>> = drawing.contours.iter().flatten().copied().collect();
+    let all: Vec<Point2<f64>> = drawing
+        .contours
+        .iter()
+        .chain(&drawing.strokes)
+        .flatten()
+        .copied()
+        .collect();
     let (lo, hi) = all.iter().fold(
         (
             Point2::new(f64::MAX, f64::MAX),
@@ -140,13 +167,106 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
                 .collect()
         })
         .collect();
-    let an = contour::analyse(&norm, &drawing.over, opts.spacing)?;
+    // Occluded contours: open strokes ending on closed contours are completed behind them
+    // (T-junctions, section 3.2), and the occluders go in front of the completed contours.
+    let strokes: Vec<Vec<Point2<f64>>> = drawing
+        .strokes
+        .iter()
+        .map(|c| {
+            c.iter()
+                .map(|p| Point2::from((p - center) / diag))
+                .collect()
+        })
+        .collect();
+    let done = completion::complete(&norm, &strokes, opts.spacing)?;
+    let mut norm = norm;
+    norm.extend(done.contours.iter().cloned());
+    let mut over = drawing.over.clone();
+    over.extend(done.over.iter().copied());
+    let an = contour::analyse(&norm, &over, opts.spacing, opts.fold_behind)?;
     let skels: Vec<chordal_axis::Skeleton2> = an
         .parts
         .iter()
         .map(|p| chordal_axis::chordal_axis(p, opts.skeleton_spacing))
         .collect::<Result<_>>()?;
-    let sk3 = skeleton3d::solve(&skels, &an.overlaps, &opts.weights, opts.min_gap)?;
+    // d_MinSurf holds at the skeleton vertices (eq. 3); the blended surfaces between them can
+    // come closer. Measure the real gap on the mesh and, where it falls short, solve again with
+    // the constraint gap widened by the shortfall (at most GAP_ROUNDS times).
+    let mut gap = opts.min_gap;
+    let mut built = build_volume(&an, &skels, opts, gap, diag, center)?;
+    let mut surface_gap = part_gap(&built.mesh, &built.f, &an.overlaps);
+    for _ in 0..GAP_ROUNDS {
+        if surface_gap >= opts.min_gap * (1.0 - 1e-3) {
+            break;
+        }
+        gap += 1.5 * (opts.min_gap - surface_gap);
+        built = build_volume(&an, &skels, opts, gap, diag, center)?;
+        surface_gap = part_gap(&built.mesh, &built.f, &an.overlaps);
+    }
+    let Built {
+        mut mesh,
+        sk3,
+        part_reports,
+        ..
+    } = built;
+    let (area_ratio, iou) = silhouette_match(&an.parts, &mesh);
+    for p in &mut mesh.positions {
+        *p = Point3::new(p.x * diag + center.x, p.y * diag + center.y, p.z * diag);
+    }
+    mesh.normals = None;
+    let topo = Topology::build(&mesh);
+    let chi = mesh.positions.len() as i64 - topo.edges.len() as i64 + mesh.faces.len() as i64;
+    let comps = topo.components.len() as i64;
+    let report = SketchReport {
+        contours: drawing.contours.len(),
+        crossings: an.crossings,
+        self_crossings: an.self_crossings,
+        t_junctions: 2 * drawing.strokes.len(),
+        completed: done.completed.clone(),
+        completion_search: done.searched,
+        overlaps: an.overlaps.clone(),
+        parts: part_reports,
+        depth_constraints: sk3.constraints,
+        active_constraints: sk3.active,
+        options: opts.clone(),
+        vertices: mesh.positions.len(),
+        faces: mesh.faces.len(),
+        closed_manifold: topo.is_closed_manifold(),
+        components: topo.components.len(),
+        euler_characteristic: chi,
+        genus: (2 * comps - chi) / 2,
+        silhouette_area_ratio: area_ratio,
+        silhouette_iou: iou,
+        surface_gap: surface_gap.is_finite().then_some(surface_gap * diag),
+        constraint_gap: gap,
+        drawing_diagonal: diag,
+        seconds: t0.elapsed().as_secs_f64(),
+    };
+    Ok((mesh, report))
+}
+
+/// Rounds of widening the depth-constraint gap until the surfaces are d_MinSurf apart.
+const GAP_ROUNDS: usize = 3;
+
+/// The volume of the parts and its mesh (normalised units), for one constraint gap.
+struct Built {
+    mesh: Mesh,
+    f: SketchImplicit,
+    sk3: skeleton3d::Skeleton3,
+    part_reports: Vec<PartReport>,
+}
+
+/// Skeleton depths (section 4.4, constraint gap `gap`), sphere blends (section 5) and their
+/// polygonization (marching cubes, relaxation, subdivision as in `reconstruct`).
+fn build_volume(
+    an: &contour::Analysis,
+    skels: &[chordal_axis::Skeleton2],
+    opts: &SketchOptions,
+    gap: f64,
+    diag: f64,
+    center: Point2<f64>,
+) -> Result<Built> {
+    let sk3 = skeleton3d::solve(skels, &an.overlaps, &opts.weights, gap)?;
     if sk3.z.iter().any(|z| !z.is_finite()) {
         return Err(Error::Numerical(
             "the skeleton depths came out non-finite".into(),
@@ -154,13 +274,13 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
     }
 
     // Spherical implicits per part, fitted to the silhouette (section 5).
-    let mut blends = Vec::with_capacity(skels.len());
+    let mut jobs = Vec::with_capacity(skels.len());
     let mut seeds = Vec::new();
     let mut centers_all = Vec::new();
     let mut rmax = 0.0f64;
     let mut off = 0;
     let mut part_reports = Vec::new();
-    for (part, sk) in an.parts.iter().zip(&skels) {
+    for (part, sk) in an.parts.iter().zip(skels) {
         let z = &sk3.z[off..off + sk.nodes.len()];
         off += sk.nodes.len();
         let centers: Vec<Point3<f64>> = sk
@@ -193,6 +313,7 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
             / part.outer.len() as f64;
         part_reports.push(PartReport {
             contour: part.contour,
+            level: part.level,
             holes: part.holes.len(),
             skeleton_vertices: sk.nodes.len(),
             skeleton_edges: sk.edges.len(),
@@ -214,14 +335,22 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
                 seeds.push(c + (q - c) * (k as f64 / 8.0));
             }
         }
-        let blend = volume::SphereBlend::fit(centers, &sk.radius, &sil)?;
+        jobs.push((centers, &sk.radius, sil));
+    }
+    // The parts' fits are independent: in parallel (each one is sequential, so the result
+    // does not depend on the thread count).
+    let blends: Vec<volume::SphereBlend> = {
+        use rayon::prelude::*;
+        jobs.into_par_iter()
+            .map(|(centers, radius, sil)| volume::SphereBlend::fit(centers, radius, &sil))
+            .collect::<Result<_>>()?
+    };
+    for (k, blend) in blends.iter().enumerate() {
         if blend.weights.iter().any(|w| !w.is_finite()) || blend.weights.iter().all(|w| *w <= 0.0) {
             return Err(Error::Numerical(format!(
-                "the sphere weights of part {} did not fit the silhouette",
-                blends.len()
+                "the sphere weights of part {k} did not fit the silhouette"
             )));
         }
-        blends.push(blend);
     }
     let f = SketchImplicit { parts: blends };
 
@@ -258,33 +387,46 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
             t.swap(1, 2);
         }
     }
-    let (area_ratio, iou) = silhouette_match(&an.parts, &mesh);
-    for p in &mut mesh.positions {
-        *p = Point3::new(p.x * diag + center.x, p.y * diag + center.y, p.z * diag);
+    Ok(Built {
+        mesh,
+        f,
+        sk3,
+        part_reports,
+    })
+}
+
+/// Smallest distance between the surfaces of two overlapping parts (normalised units;
+/// infinity without overlaps): every vertex goes to the part whose implicit is lowest there,
+/// and the vertices of each (front, back) pair are compared through a k-d tree.
+fn part_gap(mesh: &Mesh, f: &SketchImplicit, overlaps: &[(usize, usize)]) -> f64 {
+    use rayon::prelude::*;
+    if overlaps.is_empty() || f.parts.len() < 2 {
+        return f64::INFINITY;
     }
-    mesh.normals = None;
-    let topo = Topology::build(&mesh);
-    let chi = mesh.positions.len() as i64 - topo.edges.len() as i64 + mesh.faces.len() as i64;
-    let comps = topo.components.len() as i64;
-    let report = SketchReport {
-        contours: drawing.contours.len(),
-        crossings: an.crossings,
-        overlaps: an.overlaps.clone(),
-        parts: part_reports,
-        depth_constraints: sk3.constraints,
-        active_constraints: sk3.active,
-        options: opts.clone(),
-        vertices: mesh.positions.len(),
-        faces: mesh.faces.len(),
-        closed_manifold: topo.is_closed_manifold(),
-        components: topo.components.len(),
-        euler_characteristic: chi,
-        genus: (2 * comps - chi) / 2,
-        silhouette_area_ratio: area_ratio,
-        silhouette_iou: iou,
-        seconds: t0.elapsed().as_secs_f64(),
-    };
-    Ok((mesh, report))
+    let owner: Vec<usize> = mesh.positions.par_iter().map(|p| f.owner(p)).collect();
+    let mut best = f64::INFINITY;
+    for &(a, b) in overlaps {
+        let pa: Vec<Point3<f64>> = (0..mesh.positions.len())
+            .filter(|&v| owner[v] == a)
+            .map(|v| mesh.positions[v])
+            .collect();
+        let pb: Vec<Point3<f64>> = (0..mesh.positions.len())
+            .filter(|&v| owner[v] == b)
+            .map(|v| mesh.positions[v])
+            .collect();
+        if pa.is_empty() || pb.is_empty() {
+            continue;
+        }
+        let Ok(tree) = crate::spatial::KdTree::build(&pb) else {
+            continue;
+        };
+        let d = pa
+            .par_iter()
+            .map(|p| tree.nearest(p).1)
+            .reduce(|| f64::INFINITY, f64::min);
+        best = best.min(d);
+    }
+    best
 }
 
 /// Rasterises the drawing's regions and the mesh projected on z = 0 on a 256^2 grid over the
@@ -376,7 +518,7 @@ mod tests {
     fn blob_gives_one_closed_sphere_like_mesh() {
         let d = Drawing {
             contours: vec![ellipse(0.0, 0.0, 50.0, 30.0)],
-            over: vec![],
+            ..Default::default()
         };
         let (m, r) = sketch(&d, &SketchOptions::default()).unwrap();
         assert!(r.closed_manifold, "{r:?}");

@@ -9,6 +9,18 @@
 //! are combined by union (min), so parts kept apart by the depth constraints stay apart.
 //! A tiny softening eps_i^2 = (0.05 r_i)^2 in d^2 keeps f finite at the centres (radii are
 //! floored at 0.2 times their mean first).
+//!
+//! Centring (not in the paper): with the centres fixed on the chordal axis the weights alone
+//! cannot match both sides of a bent tube: the field of a curved chain is stronger on its
+//! concave side, so the fitted surface sits inside the outline on the convex side and beyond
+//! it on the concave side, and a ring's hole comes out 15 % too small (IoU 0.85). So the fit
+//! alternates [`CENTRING_ROUNDS`] = 2 times with a move of the centres in the drawing
+//! plane: every silhouette point q_j gets its first-order distance to the current surface
+//! e_j = f(q_j) / |grad f(q_j)| (positive where the surface lies inside the outline), and the
+//! centre i nearest to q_j in (x, y) moves by the mean of e_j n_ij over its points (n_ij the
+//! unit direction from the centre to q_j, in the plane), at most 0.3 r_i a round. On the two
+//! sides of a tube the moves cancel except for the asymmetry, which is what is corrected; the
+//! mean thickness is left to the weights. Depths z stay those of the skeleton (section 4).
 
 use super::lsi::nnls;
 use crate::error::Result;
@@ -17,6 +29,14 @@ use nalgebra::{DMatrix, DVector, Point3, Vector3};
 
 /// The iso-value C.
 pub const ISO: f64 = 1.0;
+
+/// Rounds of in-plane centring of the sphere centres (module docs).
+pub const CENTRING_ROUNDS: usize = 2;
+
+/// Squared distance in the drawing plane.
+fn planar2(a: &Point3<f64>, b: &Point3<f64>) -> f64 {
+    (a.x - b.x).powi(2) + (a.y - b.y).powi(2)
+}
 
 /// One part's blended spheres.
 #[derive(Debug, Clone)]
@@ -40,8 +60,61 @@ impl SphereBlend {
         (v, g)
     }
 
-    /// Fits the weights to the silhouette points `sil` (seed 001 section 5).
+    /// Fits the weights to the silhouette points `sil` (seed 001 section 5), alternating with
+    /// the in-plane centring of the module docs.
     pub fn fit(centers: Vec<Point3<f64>>, radius: &[f64], sil: &[Point3<f64>]) -> Result<Self> {
+        let n = centers.len();
+        // Nearest centre (in the drawing plane) of every silhouette point.
+        let near: Vec<usize> = sil
+            .iter()
+            .map(|q| {
+                (0..n)
+                    .min_by(|&a, &b| planar2(&centers[a], q).total_cmp(&planar2(&centers[b], q)))
+                    .unwrap_or(0)
+            })
+            .collect();
+        // The centring rounds fit to every other silhouette point (half the cost); the last
+        // fit, after the last move, uses them all.
+        let half: Vec<Point3<f64>> = sil.iter().step_by(2).copied().collect();
+        let mut blend = Self::fit_weights(centers, radius, &half)?;
+        for round in 0..CENTRING_ROUNDS {
+            let mut shift = vec![nalgebra::Vector2::<f64>::zeros(); n];
+            let mut count = vec![0usize; n];
+            for (q, &i) in sil.iter().zip(&near) {
+                let (v, g) = blend.field(q);
+                let f = blend.scale * (ISO - v);
+                let gn = (g * blend.scale).norm();
+                let dir =
+                    nalgebra::Vector2::new(q.x - blend.centers[i].x, q.y - blend.centers[i].y);
+                let len = dir.norm();
+                if !(gn > 1e-12 && len > 1e-12 && f.is_finite()) {
+                    continue;
+                }
+                shift[i] += dir / len * (f / gn);
+                count[i] += 1;
+            }
+            let rmean = radius.iter().sum::<f64>() / n.max(1) as f64;
+            let mut centers = blend.centers.clone();
+            for i in 0..n {
+                if count[i] == 0 {
+                    continue;
+                }
+                let mut d = shift[i] / count[i] as f64;
+                let cap = 0.3 * radius[i].max(0.2 * rmean);
+                if d.norm() > cap {
+                    d *= cap / d.norm();
+                }
+                centers[i].x += d.x;
+                centers[i].y += d.y;
+            }
+            let last = round + 1 == CENTRING_ROUNDS;
+            blend = Self::fit_weights(centers, radius, if last { sil } else { &half })?;
+        }
+        Ok(blend)
+    }
+
+    /// The weights alone, for fixed centres.
+    fn fit_weights(centers: Vec<Point3<f64>>, radius: &[f64], sil: &[Point3<f64>]) -> Result<Self> {
         let n = centers.len();
         let rmean = radius.iter().sum::<f64>() / n.max(1) as f64;
         // Floors against skeleton nodes that touch the outline (radius near 0).
@@ -91,6 +164,20 @@ impl SketchImplicit {
             }
         }
         best
+    }
+}
+
+impl SketchImplicit {
+    /// Index of the part whose implicit is lowest at `x` (the part a surface point belongs to).
+    pub fn owner(&self, x: &Point3<f64>) -> usize {
+        let mut best = (f64::MAX, 0);
+        for (k, p) in self.parts.iter().enumerate() {
+            let f = p.scale * (ISO - p.field(x).0);
+            if f < best.0 {
+                best = (f, k);
+            }
+        }
+        best.1
     }
 }
 
