@@ -275,3 +275,52 @@ fn shared_bunny() -> Option<String> {
         None
     }
 }
+
+#[test]
+fn focus_frames_a_ball_and_rejects_an_empty_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.png");
+    let near = dir.path().join("near.png");
+    let args = |out: &std::path::Path| {
+        vec![
+            "render".to_string(),
+            fixture("spot.obj"),
+            "-o".into(),
+            out.to_str().unwrap().into(),
+            "--size".into(),
+            "300x300".into(),
+            "--quiet".into(),
+        ]
+    };
+    let (code, _, err) = run(&args(&full).iter().map(|s| s.as_str()).collect::<Vec<_>>());
+    assert_eq!(code, 0, "{err}");
+    // A ball around one vertex of spot: what is left is framed to fill the picture too.
+    let m = scansurf::io::read_mesh(Path::new(&fixture("spot.obj"))).unwrap();
+    let p = m.positions[0];
+    let focus = format!("--focus={},{},{},0.2", p.x, p.y, p.z);
+    let mut a = args(&near);
+    a.push(focus);
+    let (code, _, err) = run(&a.iter().map(|s| s.as_str()).collect::<Vec<_>>());
+    assert_eq!(code, 0, "{err}");
+    let (sf, sn) = (
+        Image::load_png(&full).unwrap().stats([255, 255, 255]),
+        Image::load_png(&near).unwrap().stats([255, 255, 255]),
+    );
+    // Unframed, a ball of radius 0.2 on spot (about 2 units across) would cover ~1 %.
+    assert!(sn.foreground_fraction > 0.1, "{sn:?}");
+    assert_ne!(std::fs::read(&full).unwrap(), std::fs::read(&near).unwrap());
+    assert!(sf.foreground_fraction > 0.2, "{sf:?}");
+    // Nothing inside: a clear error naming the option, and no file.
+    let empty = dir.path().join("empty.png");
+    let mut a = args(&empty);
+    a.push("--focus=100,100,100,0.1".into());
+    let (code, _, err) = run(&a.iter().map(|s| s.as_str()).collect::<Vec<_>>());
+    assert_ne!(code, 0);
+    assert!(err.contains("--focus"), "{err}");
+    assert!(!empty.exists());
+    let mut a = args(&empty);
+    a.push("--focus=1,2".into());
+    let (code, _, err) = run(&a.iter().map(|s| s.as_str()).collect::<Vec<_>>());
+    assert_ne!(code, 0);
+    assert!(err.contains("X,Y,Z,R"), "{err}");
+}
