@@ -12,7 +12,6 @@ pub mod curve;
 pub mod network;
 pub mod params;
 pub mod surface;
-pub mod tessellate;
 
 pub use curve::BSplineCurve;
 pub use network::{NetEdge, NetFace, PatchInput, PatchNetwork};
