@@ -185,12 +185,16 @@ fn renders_step_deviation_colours() {
         "150",
         "--preview",
         png.to_str().unwrap(),
+        "--preview-size",
+        "640x480",
         "--deviation-ply",
         dev_ply.to_str().unwrap(),
         "--quiet",
     ]);
     assert_eq!(code, 0, "{err}");
-    let p = Image::load_png(&png).unwrap().stats([255, 255, 255]);
+    let img = Image::load_png(&png).unwrap();
+    assert_eq!((img.width, img.height), (640, 480));
+    let p = img.stats([255, 255, 255]);
     println!("preview {p:?}");
     assert!(p.foreground_fraction > 0.2, "{p:?}");
     assert!(p.colored_fraction > 0.3, "{p:?}");

@@ -47,6 +47,9 @@ pub struct Args {
     /// Write a rendered picture of the patch network with its patch boundaries.
     #[arg(long, value_name = "P.png")]
     pub preview: Option<PathBuf>,
+    /// Size WxH of the preview picture in pixels.
+    #[arg(long, value_name = "WxH", default_value = "1600x1200")]
+    pub preview_size: String,
     /// Subsample point clouds above this many points (voxel grid) on read.
     #[arg(long)]
     pub max_points: Option<usize>,
@@ -98,6 +101,8 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     if let Some(p) = &a.preview {
         check_ext(p, &["png"], "the preview")?;
     }
+    // Checked before the fit, so a typo does not cost a whole run.
+    let (preview_w, preview_h) = crate::render::parse_size(&a.preview_size)?;
     if let Some(p) = &a.deviation_ply {
         check_ext(p, &["ply"], "the deviation cloud")?;
     }
@@ -182,7 +187,11 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     }
     if let Some(p) = &a.preview {
         let dist = Some(report.deviation.distances.as_slice());
-        let opts = crate::render::RenderOptions::default();
+        let opts = crate::render::RenderOptions {
+            width: preview_w,
+            height: preview_h,
+            ..crate::render::RenderOptions::default()
+        };
         crate::render::patches::network_preview(&network, &pts, dist, &opts)?.save_png(p)?;
     }
     if !quiet {
