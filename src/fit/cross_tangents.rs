@@ -49,51 +49,59 @@ use crate::nurbs::{estimate_twists, BSplineCurve, Params, PatchGrid};
 use crate::Result;
 use nalgebra::{Point3, Vector3};
 
+/// The interpolating cubic splines of a patch's four boundary rows (eq. 9-14 along one
+/// direction, with the corner tangents as end conditions), in the side order of
+/// `PatchSamples::sides`: v = 0, u = 1, v = 1, u = 0. They are exactly the patch's boundary
+/// curves, and both [`align_cross_derivatives`] and [`corner_twists`] need them; the first
+/// changes only interior cross derivatives, never the corner tangents these splines end on,
+/// so one set serves both.
+pub struct BoundarySplines {
+    pub sides: [BSplineCurve; 4],
+}
+
+impl BoundarySplines {
+    /// Interpolates the four boundary rows of `patch` on its parameters `u`, `v`.
+    pub fn of(patch: &PatchSamples, u: &Params, v: &Params) -> Result<Self> {
+        let s = patch.params_u.len() - 1;
+        let t = patch.params_v.len() - 1;
+        let row = |j: usize| -> Vec<Point3<f64>> { (0..=s).map(|i| patch.points[i][j]).collect() };
+        let col = |i: usize| -> Vec<Point3<f64>> { patch.points[i].clone() };
+        let interp = BSplineCurve::interpolate_with_end_tangents;
+        Ok(BoundarySplines {
+            sides: [
+                interp(&row(0), u, patch.tan_u0[0], patch.tan_u1[0])?,
+                interp(&col(s), v, patch.tan_v0[s], patch.tan_v1[s])?,
+                interp(&row(t), u, patch.tan_u0[t], patch.tan_u1[t])?,
+                interp(&col(0), v, patch.tan_v0[0], patch.tan_v1[0])?,
+            ],
+        })
+    }
+}
+
 /// Projects the interior cross derivatives of every side of `patch` as described in the
-/// module documentation. `edges` are the sampling's per-edge data (for the normals).
-pub fn align_cross_derivatives(patch: &mut PatchSamples, edges: &[EdgeSamples]) -> Result<()> {
+/// module documentation. `edges` are the sampling's per-edge data (for the normals),
+/// `splines` the patch's [`BoundarySplines`].
+pub fn align_cross_derivatives(
+    patch: &mut PatchSamples,
+    edges: &[EdgeSamples],
+    splines: &BoundarySplines,
+) -> Result<()> {
     let s = patch.params_u.len() - 1;
     let t = patch.params_v.len() - 1;
-    let pu = Params::new(&patch.params_u)?;
-    let pv = Params::new(&patch.params_v)?;
     // Side order of `PatchSamples::sides`: v = 0, u = 1, v = 1, u = 0.
-    for k in 0..4 {
+    for (k, curve) in splines.sides.iter().enumerate() {
         let side = patch.sides[k];
         let Some(edge) = edges.get(side.edge as usize) else {
             continue;
         };
-        let (points, params, t0, t1): (Vec<Point3<f64>>, &Params, Vector3<f64>, Vector3<f64>) =
-            match k {
-                0 => (
-                    (0..=s).map(|i| patch.points[i][0]).collect(),
-                    &pu,
-                    patch.tan_u0[0],
-                    patch.tan_u1[0],
-                ),
-                2 => (
-                    (0..=s).map(|i| patch.points[i][t]).collect(),
-                    &pu,
-                    patch.tan_u0[t],
-                    patch.tan_u1[t],
-                ),
-                1 => (
-                    (0..=t).map(|j| patch.points[s][j]).collect(),
-                    &pv,
-                    patch.tan_v0[s],
-                    patch.tan_v1[s],
-                ),
-                _ => (
-                    (0..=t).map(|j| patch.points[0][j]).collect(),
-                    &pv,
-                    patch.tan_v0[0],
-                    patch.tan_v1[0],
-                ),
-            };
-        let n = points.len();
+        let (n, params) = if k % 2 == 0 {
+            (s + 1, &patch.params_u)
+        } else {
+            (t + 1, &patch.params_v)
+        };
         if edge.normals.len() != n || n < 3 {
             continue;
         }
-        let curve = BSplineCurve::interpolate_with_end_tangents(&points, params, t0, t1)?;
         let cross = match k {
             0 => &mut patch.tan_v0,
             2 => &mut patch.tan_v1,
@@ -106,7 +114,7 @@ pub fn align_cross_derivatives(patch: &mut PatchSamples, edges: &[EdgeSamples]) 
             } else {
                 edge.normals[i]
             };
-            let Some(a) = curve.derivative(params.as_slice()[i], 1).try_normalize(0.0) else {
+            let Some(a) = curve.derivative(params[i], 1).try_normalize(0.0) else {
                 continue;
             };
             let Some(np) = (normal - a * normal.dot(&a)).try_normalize(1e-12) else {
@@ -162,16 +170,12 @@ pub fn corner_twists<I: Implicit + ?Sized>(
     grid: &PatchGrid,
     u: &Params,
     v: &Params,
+    splines: &BoundarySplines,
 ) -> Result<[Vector3<f64>; 4]> {
     let mut twist = estimate_twists(grid, u, v);
     let s = grid.points.len() - 1;
     let t = grid.points[0].len() - 1;
-    let row = |j: usize| -> Vec<Point3<f64>> { (0..=s).map(|i| grid.points[i][j]).collect() };
-    let col = |i: usize| -> Vec<Point3<f64>> { grid.points[i].clone() };
-    let v0 = BSplineCurve::interpolate_with_end_tangents(&row(0), u, grid.du_u0[0], grid.du_u1[0])?;
-    let v1 = BSplineCurve::interpolate_with_end_tangents(&row(t), u, grid.du_u0[t], grid.du_u1[t])?;
-    let u0 = BSplineCurve::interpolate_with_end_tangents(&col(0), v, grid.dv_v0[0], grid.dv_v1[0])?;
-    let u1 = BSplineCurve::interpolate_with_end_tangents(&col(s), v, grid.dv_v0[s], grid.dv_v1[s])?;
+    let [v0, u1, v1, u0] = &splines.sides;
     let (ua, ub) = u
         .as_slice()
         .first()

@@ -4,7 +4,7 @@
 //! tangents (eq. 9-14) -> a sewn patch network, measured: deviation of the input points from the
 //! patches by point inversion, normal jump across shared edges, quad quality, timings.
 
-use super::cross_tangents::{align_cross_derivatives, corner_twists};
+use super::cross_tangents::{align_cross_derivatives, corner_twists, BoundarySplines};
 use super::net::{fit_net, NetReport, PatchSize};
 use super::samples::{sample_patches, SampleOptions, SampleReport};
 use crate::implicit::pou::{FitOptions as ImplicitOptions, FitStats, PouImplicit};
@@ -131,8 +131,9 @@ pub fn fit(
         .par_iter()
         .map(|s| {
             let mut s = s.clone();
-            align_cross_derivatives(&mut s, &sampling.edges)?;
             let (pu, pv) = (Params::new(&s.params_u)?, Params::new(&s.params_v)?);
+            let splines = BoundarySplines::of(&s, &pu, &pv)?;
+            align_cross_derivatives(&mut s, &sampling.edges, &splines)?;
             let mut grid = PatchGrid {
                 points: s.points,
                 du_u0: s.tan_u0,
@@ -141,7 +142,7 @@ pub fn fit(
                 dv_v1: s.tan_v1,
                 twist: Twist::Estimate,
             };
-            grid.twist = Twist::Given(corner_twists(&f, &grid, &pu, &pv)?);
+            grid.twist = Twist::Given(corner_twists(&f, &grid, &pu, &pv, &splines)?);
             let surface = BSplineSurface::interpolate_grid(&grid, &pu, &pv)?;
             Ok(PatchInput {
                 surface,
