@@ -2,19 +2,8 @@
 
 use scansurf::render::Image;
 use std::path::Path;
-use std::process::Command;
-
-fn run(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_scansurf"))
-        .args(args)
-        .output()
-        .expect("run scansurf");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::run;
 
 fn fixture(n: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -1,18 +1,8 @@
 //! `scansurf smooth` through the binary.
 
 use std::path::Path;
-use std::process::Command;
-
-fn run(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_scansurf"))
-        .args(args)
-        .output()
-        .expect("run scansurf");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::run;
 
 #[test]
 fn smooths_keeps_connectivity_and_reports() {
@@ -21,7 +11,7 @@ fn smooths_keeps_connectivity_and_reports() {
     let out = dir.path().join("s.ply");
     let rep = dir.path().join("s.json");
     for method in ["anisotropic", "arc", "centroid"] {
-        let (code, err) = run(&[
+        let (code, _, err) = run(&[
             "smooth",
             input.to_str().unwrap(),
             "-o",
@@ -52,7 +42,7 @@ fn smooths_keeps_connectivity_and_reports() {
         assert_eq!(r["method"], method);
     }
     // Only a region: the faces from 5000 on and one ring.
-    let (code, err) = run(&[
+    let (code, _, err) = run(&[
         "smooth",
         input.to_str().unwrap(),
         "-o",
@@ -79,7 +69,7 @@ fn bad_options_and_point_clouds_fail_cleanly() {
     let dir = tempfile::tempdir().unwrap();
     let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/spot.obj");
     let out = dir.path().join("s.ply");
-    let (code, err) = run(&[
+    let (code, _, err) = run(&[
         "smooth",
         input.to_str().unwrap(),
         "-o",
@@ -92,7 +82,7 @@ fn bad_options_and_point_clouds_fail_cleanly() {
     assert!(!out.exists());
     let cloud = dir.path().join("c.xyz");
     std::fs::write(&cloud, "0 0 0\n1 0 0\n0 1 0\n").unwrap();
-    let (code, err) = run(&[
+    let (code, _, err) = run(&[
         "smooth",
         cloud.to_str().unwrap(),
         "-o",

@@ -2,18 +2,8 @@
 //! allocation with a message that names the file and suggests a coarser setting.
 
 use std::path::Path;
-use std::process::Command;
-
-fn run(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_scansurf"))
-        .args(args)
-        .output()
-        .expect("run scansurf");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::run;
 
 fn spot() -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -26,7 +16,7 @@ fn spot() -> String {
 fn too_fine_a_patch_size_is_refused_before_allocating() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("m.step");
-    let (code, err) = run(&[
+    let (code, _, err) = run(&[
         "fit",
         &spot(),
         "-o",
@@ -51,7 +41,7 @@ fn too_fine_a_patch_size_is_refused_before_allocating() {
 fn too_fine_a_resolution_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("m.ply");
-    let (code, err) = run(&[
+    let (code, _, err) = run(&[
         "reconstruct",
         &spot(),
         "-o",
@@ -72,19 +62,19 @@ fn too_fine_a_resolution_is_refused() {
 
 #[test]
 fn a_file_larger_than_the_budget_is_refused() {
-    let (code, err) = run(&["inspect", &spot(), "--max-memory", "100K"]);
+    let (code, _, err) = run(&["inspect", &spot(), "--max-memory", "100K"]);
     assert_eq!(code, 1, "{err}");
     assert!(
         err.contains("spot.obj") && err.contains("--max-memory 100.0 KiB"),
         "{err}"
     );
-    let (code, _) = run(&["inspect", &spot(), "--max-memory", "64M"]);
+    let (code, _, _) = run(&["inspect", &spot(), "--max-memory", "64M"]);
     assert_eq!(code, 0);
 }
 
 #[test]
 fn a_bad_size_is_a_usage_error() {
-    let (code, err) = run(&["inspect", &spot(), "--max-memory", "12Q"]);
+    let (code, _, err) = run(&["inspect", &spot(), "--max-memory", "12Q"]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("--max-memory 12Q"), "{err}");
 }

@@ -58,3 +58,17 @@ pub fn cad_check(
     println!("cad_check {}: {v}", model.display());
     v
 }
+
+/// Runs the scansurf binary with `args`; returns (exit code, stdout, stderr), -1 for a code
+/// when a signal ended it.
+pub fn run(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_scansurf"))
+        .args(args)
+        .output()
+        .expect("run scansurf");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
