@@ -1,19 +1,9 @@
 //! `scansurf inspect` on good and bad input, through the binary.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn scansurf(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_scansurf"))
-        .args(args)
-        .output()
-        .expect("run scansurf");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::run as scansurf;
 
 fn shared(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
