@@ -147,22 +147,9 @@ pub fn solve_on_line<I: Implicit + ?Sized>(
         return Ok((s, g));
     }
     // Fallback: nearest sign change on a grid of 32 steps each way, then Illinois.
-    let v0 = at(0.0).0;
-    let n = 32;
-    let mut bracket = None;
-    'scan: for k in 0..n {
-        for sign in [1.0, -1.0] {
-            let (a, b) = (
-                sign * s_max * k as f64 / n as f64,
-                sign * s_max * (k + 1) as f64 / n as f64,
-            );
-            let (fa, fb) = (if k == 0 { v0 } else { at(a).0 }, at(b).0);
-            if fa.is_finite() && fb.is_finite() && (fa <= 0.0) != (fb <= 0.0) {
-                bracket = Some((a, fa, b, fb));
-                break 'scan;
-            }
-        }
-    }
+    let bracket = nearest_bracket(&|s| at(s).0, s_max, 32, &|lo, hi| {
+        (lo <= 0.0) != (hi <= 0.0)
+    });
     let Some((a, fa, b, fb)) = bracket else {
         return Err(Error::Numerical(format!(
             "no surface point on the line through ({:.6}, {:.6}, {:.6}) within {s_max:.3e}",
@@ -196,25 +183,8 @@ pub fn solve_on_line_facing<I: Implicit + ?Sized>(
         }
     }
     let at = |s: f64| f.value_and_gradient(&(o + w * s));
-    let n = 64;
-    let value = |s: f64| at(s).0;
-    let step = s_max / n as f64;
-    let mut best: Option<(f64, f64, f64, f64)> = None;
-    // Intervals [k, k+1] step by step outward from 0 in both directions, nearest first.
-    'scan: for k in 0..n {
-        for dir in [1.0, -1.0] {
-            let (p, q) = if dir > 0.0 {
-                (k as f64 * step, (k + 1) as f64 * step)
-            } else {
-                (-((k + 1) as f64) * step, -(k as f64) * step)
-            };
-            let (fp, fq) = (value(p), value(q));
-            if fp.is_finite() && fq.is_finite() && fp <= 0.0 && fq > 0.0 {
-                best = Some((p, fp, q, fq));
-                break 'scan;
-            }
-        }
-    }
+    // f <= 0 at the lower end and > 0 at the upper: increasing along w.
+    let best = nearest_bracket(&|s| at(s).0, s_max, 64, &|lo, hi| lo <= 0.0 && hi > 0.0);
     let Some((a, fa, b, fb)) = best else {
         return Err(Error::Numerical(format!(
             "no outward-facing surface point on the line through ({:.6}, {:.6}, {:.6}) within {s_max:.3e}",
@@ -227,6 +197,31 @@ pub fn solve_on_line_facing<I: Implicit + ?Sized>(
             o.x, o.y, o.z
         ))
     })
+}
+
+/// The interval of the grid of `n` steps each way from s = 0 nearest to 0 (outward, the
+/// positive side first at each distance) whose end values f(lo), f(hi), lo < hi, are finite
+/// and satisfy `accept`: (lo, f(lo), hi, f(hi)). One scan for both line solvers, which differ
+/// only in what they accept (any sign change, or an increasing one).
+fn nearest_bracket(
+    value: &dyn Fn(f64) -> f64,
+    s_max: f64,
+    n: usize,
+    accept: &dyn Fn(f64, f64) -> bool,
+) -> Option<(f64, f64, f64, f64)> {
+    let at_step = |k: usize| s_max * k as f64 / n as f64;
+    let f0 = value(0.0);
+    for k in 0..n {
+        let (near, far) = (at_step(k), at_step(k + 1));
+        for (lo, hi) in [(near, far), (-far, -near)] {
+            let f_lo = if lo == 0.0 { f0 } else { value(lo) };
+            let f_hi = if hi == 0.0 { f0 } else { value(hi) };
+            if f_lo.is_finite() && f_hi.is_finite() && accept(f_lo, f_hi) {
+                return Some((lo, f_lo, hi, f_hi));
+            }
+        }
+    }
+    None
 }
 
 /// Illinois (modified regula falsi) on a bracket (a, f(a)), (b, f(b)) of opposite signs.
