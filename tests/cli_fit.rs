@@ -88,6 +88,9 @@ fn bunny_step_is_valid_closed_and_accurate() {
         f(dev, &["mean"]) <= 2e-4 && f(dev, &["p99"]) <= 1e-3,
         "{dev}"
     );
+    // Spike guard: at the crease of the base two interior section rows once ran onto the
+    // bottom sheet (max 1.7e-3); with those rows rejected the max is 1.16e-3.
+    assert!(f(dev, &["max"]) <= 1.4e-3, "{dev}");
     // The STEP rendered back (issue 9): shaded, filling the frame, patch boundaries as dark
     // lines, hardly any orange back faces (folds). Measured on a 1,472-patch bunny STEP:
     // foreground 0.29, 229 grey levels, dark 0.30, coloured 0.0013.
@@ -130,6 +133,7 @@ fn bunny_step_is_valid_closed_and_accurate() {
     let d = &c["deviation"];
     assert!(f(d, &["mean_rel"]) <= 2e-4, "{d}");
     assert!(f(d, &["p99_rel"]) <= 1e-3, "{d}");
+    assert!(f(d, &["max_rel"]) <= 5e-3, "{d}");
 }
 
 /// IGES 5.3 of the same network reads back with one B-spline face per patch; the STEP and IGES
