@@ -147,21 +147,15 @@ pub fn solve_on_line<I: Implicit + ?Sized>(
         return Ok((s, g));
     }
     // Fallback: nearest sign change on a grid of 32 steps each way, then Illinois.
-    let bracket = nearest_bracket(&|s| at(s).0, s_max, 32, &|lo, hi| {
-        (lo <= 0.0) != (hi <= 0.0)
-    });
-    let Some((a, fa, b, fb)) = bracket else {
-        return Err(Error::Numerical(format!(
-            "no surface point on the line through ({:.6}, {:.6}, {:.6}) within {s_max:.3e}",
-            o.x, o.y, o.z
-        )));
-    };
-    refine_bracket(&at, (a, fa), (b, fb), s_max, tol).ok_or_else(|| {
-        Error::Numerical(format!(
-            "root finding on the line through ({:.6}, {:.6}, {:.6}) did not converge",
-            o.x, o.y, o.z
-        ))
-    })
+    scan_and_refine(
+        &at,
+        o,
+        s_max,
+        tol,
+        32,
+        &|lo, hi| (lo <= 0.0) != (hi <= 0.0),
+        "surface point",
+    )
 }
 
 /// Root of f(o + s w) = 0 nearest s = 0 in [-s_max, s_max] at which f *increases* along w
@@ -184,14 +178,36 @@ pub fn solve_on_line_facing<I: Implicit + ?Sized>(
     }
     let at = |s: f64| f.value_and_gradient(&(o + w * s));
     // f <= 0 at the lower end and > 0 at the upper: increasing along w.
-    let best = nearest_bracket(&|s| at(s).0, s_max, 64, &|lo, hi| lo <= 0.0 && hi > 0.0);
-    let Some((a, fa, b, fb)) = best else {
+    scan_and_refine(
+        &at,
+        o,
+        s_max,
+        tol,
+        64,
+        &|lo, hi| lo <= 0.0 && hi > 0.0,
+        "outward-facing surface point",
+    )
+}
+
+/// The bracketing fallback of both line solvers: the nearest bracket `accept`s
+/// ([`nearest_bracket`], `n` steps each way), refined by Illinois ([`refine_bracket`]).
+/// `what` names the root sought in the error when no bracket is found.
+fn scan_and_refine(
+    at: &dyn Fn(f64) -> (f64, Vector3<f64>),
+    o: Point3<f64>,
+    s_max: f64,
+    tol: f64,
+    n: usize,
+    accept: &dyn Fn(f64, f64) -> bool,
+    what: &str,
+) -> Result<(f64, Vector3<f64>)> {
+    let Some((a, fa, b, fb)) = nearest_bracket(&|s| at(s).0, s_max, n, accept) else {
         return Err(Error::Numerical(format!(
-            "no outward-facing surface point on the line through ({:.6}, {:.6}, {:.6}) within {s_max:.3e}",
+            "no {what} on the line through ({:.6}, {:.6}, {:.6}) within {s_max:.3e}",
             o.x, o.y, o.z
         )));
     };
-    refine_bracket(&at, (a, fa), (b, fb), s_max, tol).ok_or_else(|| {
+    refine_bracket(at, (a, fa), (b, fb), s_max, tol).ok_or_else(|| {
         Error::Numerical(format!(
             "root finding on the line through ({:.6}, {:.6}, {:.6}) did not converge",
             o.x, o.y, o.z
