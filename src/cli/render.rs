@@ -142,21 +142,11 @@ fn is_step(path: &std::path::Path) -> bool {
 
 /// Distance from every vertex of `mesh` to the nearest point of `cloud`.
 fn nearest_distances(mesh: &crate::Mesh, cloud: &[nalgebra::Point3<f64>]) -> Result<Vec<f64>> {
-    use kiddo::{ImmutableKdTree, SquaredEuclidean};
     use rayon::prelude::*;
-    let pts: Vec<[f64; 3]> = cloud.iter().map(|p| [p.x, p.y, p.z]).collect();
-    let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&pts)
-        .map_err(|e| Error::Degenerate(format!("cannot index the cloud: {e:?}")))?;
+    let tree = crate::spatial::KdTree::build(cloud)?;
     Ok(mesh
         .positions
         .par_iter()
-        .map(|p| {
-            tree.query(&[p.x, p.y, p.z])
-                .nearest_one::<SquaredEuclidean<f64>>()
-                .execute()
-                .distance
-                .max(0.0)
-                .sqrt()
-        })
+        .map(|p| tree.nearest(p).1)
         .collect())
 }

@@ -200,20 +200,10 @@ fn nearest_values(
     points: &[Point3<f64>],
     values: &[f64],
 ) -> Result<Vec<f64>> {
-    use kiddo::{ImmutableKdTree, SquaredEuclidean};
-    let pts: Vec<[f64; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
-    let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&pts)
-        .map_err(|e| Error::Degenerate(format!("cannot index the points: {e:?}")))?;
+    let tree = crate::spatial::KdTree::build(points)?;
     Ok(queries
         .par_iter()
-        .map(|q| {
-            let k = tree
-                .query(&[q.x, q.y, q.z])
-                .nearest_one::<SquaredEuclidean<f64>>()
-                .execute()
-                .item as usize;
-            values[k]
-        })
+        .map(|q| values[tree.nearest(q).0])
         .collect())
 }
 
