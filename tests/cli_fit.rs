@@ -3,8 +3,9 @@
 //! without normals, determinism and bad options.
 
 mod common;
+use common::{fit_report as fit, json_f64 as f};
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
 fn bin() -> Command {
@@ -29,37 +30,6 @@ fn bunny() -> Option<PathBuf> {
         eprintln!("SKIPPED: no ../shared/data");
         None
     }
-}
-
-fn fit(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
-    let report = out.with_extension("json");
-    let o = bin()
-        .arg("fit")
-        .arg(input)
-        .arg("-o")
-        .arg(out)
-        .arg("--report")
-        .arg(&report)
-        .arg("-q")
-        .args(extra)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "fit {} failed: {}",
-        input.display(),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap()
-}
-
-fn f(v: &serde_json::Value, path: &[&str]) -> f64 {
-    let mut x = v;
-    for k in path {
-        x = &x[*k];
-    }
-    x.as_f64()
-        .unwrap_or_else(|| panic!("{path:?} missing in {v}"))
 }
 
 /// The fit issue's acceptance on the Stanford bunny (default options), measured by

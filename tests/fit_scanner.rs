@@ -9,46 +9,14 @@
 //! 1.35e-4 of the diagonal.
 
 mod common;
+use common::{fit_report as fit, json_f64 as f};
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::PathBuf;
 
 fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("fixtures")
         .join(name)
-}
-
-fn f(v: &serde_json::Value, path: &[&str]) -> f64 {
-    let mut x = v;
-    for k in path {
-        x = &x[*k];
-    }
-    x.as_f64()
-        .unwrap_or_else(|| panic!("{path:?} missing in {v}"))
-}
-
-/// Runs `scansurf fit INPUT -o STEP --report R.json --patches 150 -q`; returns the report.
-fn fit(input: &Path, step: &Path) -> serde_json::Value {
-    let report = step.with_extension("json");
-    let o = Command::new(env!("CARGO_BIN_EXE_scansurf"))
-        .arg("fit")
-        .arg(input)
-        .arg("-o")
-        .arg(step)
-        .arg("--report")
-        .arg(&report)
-        .args(["--patches", "150", "-q"])
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "fit {} failed ({:?}): {}",
-        input.display(),
-        o.status.code(),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap()
 }
 
 #[test]
@@ -58,7 +26,7 @@ fn fit_reads_e57_and_laz_into_closed_accurate_step() {
     for name in ["spot_2scans.e57", "spot.laz"] {
         let input = fixture(name);
         let step = dir.path().join(format!("{name}.step"));
-        let r = fit(&input, &step);
+        let r = fit(&input, &step, &["--patches", "150"]);
         assert_eq!(f(&r, &["input_points"]), 1981.0, "{name}");
         let patches = f(&r, &["patches"]);
         assert!((patches - 150.0).abs() <= 0.15 * 150.0, "{name}: {patches}");

@@ -72,3 +72,38 @@ pub fn run(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// The number at `path` in a JSON report (panics naming the path when it is missing).
+pub fn json_f64(v: &serde_json::Value, path: &[&str]) -> f64 {
+    let mut x = v;
+    for k in path {
+        x = &x[*k];
+    }
+    x.as_f64()
+        .unwrap_or_else(|| panic!("{path:?} missing in {v}"))
+}
+
+/// Runs `scansurf fit INPUT -o OUT --report OUT.json -q EXTRA...`, asserts success and
+/// returns the report.
+pub fn fit_report(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let report = out.with_extension("json");
+    let o = Command::new(env!("CARGO_BIN_EXE_scansurf"))
+        .arg("fit")
+        .arg(input)
+        .arg("-o")
+        .arg(out)
+        .arg("--report")
+        .arg(&report)
+        .arg("-q")
+        .args(extra)
+        .output()
+        .expect("run scansurf");
+    assert!(
+        o.status.success(),
+        "fit {} failed ({:?}): {}",
+        input.display(),
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&std::fs::read(&report).expect("read the report")).expect("JSON report")
+}
