@@ -1014,6 +1014,17 @@ pub(crate) mod tests {
         assert!(e < 1e-3, "{e} {:?}", f.stats());
     }
 
+    /// Asserts that 30 random lines (from `seed`) across f's probe box find no jump.
+    fn assert_continuous(f: &PouImplicit, seed: u64) {
+        let fails = jumps(f, &probe_box(f), 30, seed);
+        assert!(
+            fails.is_empty(),
+            "{} jumps: {:?}",
+            fails.len(),
+            &fails[..fails.len().min(5)]
+        );
+    }
+
     /// Walks `lines` random straight lines across `bbox` and looks for jumps of F or grad F:
     /// each line is cut into 300 intervals, and an interval is halved while the trapezoid rule
     /// on the directional derivative misses the change of F (by more than 1e-9 of the diagonal)
@@ -1134,13 +1145,7 @@ pub(crate) mod tests {
         let f = PouImplicit::fit(&p, &n, &FitOptions::default()).unwrap();
         let st = f.stats();
         assert!(st.extrapolating > 0, "{st:?}");
-        let fails = jumps(&f, &probe_box(&f), 30, 7);
-        assert!(
-            fails.is_empty(),
-            "{} jumps: {:?}",
-            fails.len(),
-            &fails[..fails.len().min(5)]
-        );
+        assert_continuous(&f, 7);
     }
 
     #[test]
@@ -1156,13 +1161,7 @@ pub(crate) mod tests {
         };
         let mesh = crate::polygonize::test_shapes::load_obj(&path.to_string_lossy());
         let f = PouImplicit::from_mesh(&mesh, &FitOptions::default()).unwrap();
-        let fails = jumps(&f, &probe_box(&f), 30, 11);
-        assert!(
-            fails.is_empty(),
-            "{} jumps: {:?}",
-            fails.len(),
-            &fails[..fails.len().min(5)]
-        );
+        assert_continuous(&f, 11);
     }
 
     #[test]
