@@ -158,26 +158,21 @@ pub fn sketch(drawing: &Drawing, opts: &SketchOptions) -> Result<(Mesh, SketchRe
         return Err(Error::Degenerate("the drawing has no extent".into()));
     }
     let center = Point2::from((lo.coords + hi.coords) / 2.0);
-    let norm: Vec<Vec<Point2<f64>>> = drawing
-        .contours
-        .iter()
-        .map(|c| {
-            c.iter()
-                .map(|p| Point2::from((p - center) / diag))
-                .collect()
-        })
-        .collect();
+    // Both contours and strokes in the unit frame: centred, divided by the diagonal.
+    let to_unit = |curves: &[Vec<Point2<f64>>]| -> Vec<Vec<Point2<f64>>> {
+        curves
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .map(|p| Point2::from((p - center) / diag))
+                    .collect()
+            })
+            .collect()
+    };
+    let norm = to_unit(&drawing.contours);
     // Occluded contours: open strokes ending on closed contours are completed behind them
     // (T-junctions, section 3.2), and the occluders go in front of the completed contours.
-    let strokes: Vec<Vec<Point2<f64>>> = drawing
-        .strokes
-        .iter()
-        .map(|c| {
-            c.iter()
-                .map(|p| Point2::from((p - center) / diag))
-                .collect()
-        })
-        .collect();
+    let strokes = to_unit(&drawing.strokes);
     let done = completion::complete(&norm, &strokes, opts.spacing)?;
     let mut norm = norm;
     norm.extend(done.contours.iter().cloned());
