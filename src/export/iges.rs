@@ -273,50 +273,10 @@ fn push_records(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nurbs::network::PatchInput;
-    use crate::nurbs::Params;
-    use nalgebra::Point3;
+    use crate::nurbs::network::two_patch_network;
 
     fn two_patches() -> PatchNetwork {
-        let k = Params::uniform(2).unwrap().cubic_knots();
-        let mk = |x0: f64| {
-            let ctrl = (0..5)
-                .map(|i| {
-                    (0..5)
-                        .map(|j| {
-                            let x = x0 + i as f64 * 0.25;
-                            Point3::new(x, j as f64 * 0.25, 0.1 * x * x * 1e5)
-                        })
-                        .collect()
-                })
-                .collect();
-            BSplineSurface::new(3, 3, k.clone(), k.clone(), ctrl).unwrap()
-        };
-        let (a, b) = (mk(0.0), mk(1.0));
-        let v = vec![
-            a.evaluate(0.0, 0.0),
-            a.evaluate(1.0, 0.0),
-            a.evaluate(1.0, 1.0),
-            a.evaluate(0.0, 1.0),
-            b.evaluate(1.0, 0.0),
-            b.evaluate(1.0, 1.0),
-        ];
-        PatchNetwork::from_patches(
-            v,
-            vec![
-                PatchInput {
-                    surface: a,
-                    corners: [0, 1, 2, 3],
-                    same_sense: true,
-                },
-                PatchInput {
-                    surface: b,
-                    corners: [1, 4, 5, 2],
-                    same_sense: true,
-                },
-            ],
-        )
-        .unwrap()
+        two_patch_network(|x, _| 0.1 * x * x * 1e5)
     }
 
     #[test]

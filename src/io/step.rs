@@ -938,50 +938,12 @@ fn expand_knots(mults: &Value, knots: &Value) -> Option<Vec<f64>> {
 mod tests {
     use super::*;
     use crate::export::{step_string, ExportOptions};
-    use crate::nurbs::network::PatchInput;
-    use crate::nurbs::{Params, PatchNetwork};
+    use crate::nurbs::network::two_patch_network;
+    use crate::nurbs::PatchNetwork;
 
     fn net() -> PatchNetwork {
         // Two patches side by side sharing the edge x = 1.
-        let k = Params::uniform(2).unwrap().cubic_knots();
-        let patch = |x0: f64| {
-            let ctrl = (0..5)
-                .map(|i| {
-                    (0..5)
-                        .map(|j| {
-                            let (x, y) = (x0 + i as f64 * 0.25, j as f64 * 0.25);
-                            Point3::new(x, y, 0.2 * (x * 2.0).sin() * y)
-                        })
-                        .collect()
-                })
-                .collect();
-            BSplineSurface::new(3, 3, k.clone(), k.clone(), ctrl).unwrap()
-        };
-        let (a, b) = (patch(0.0), patch(1.0));
-        let v = vec![
-            a.evaluate(0.0, 0.0),
-            a.evaluate(1.0, 0.0),
-            a.evaluate(1.0, 1.0),
-            a.evaluate(0.0, 1.0),
-            b.evaluate(1.0, 0.0),
-            b.evaluate(1.0, 1.0),
-        ];
-        PatchNetwork::from_patches(
-            v,
-            vec![
-                PatchInput {
-                    surface: a,
-                    corners: [0, 1, 2, 3],
-                    same_sense: true,
-                },
-                PatchInput {
-                    surface: b,
-                    corners: [1, 4, 5, 2],
-                    same_sense: true,
-                },
-            ],
-        )
-        .unwrap()
+        two_patch_network(|x, y| 0.2 * (x * 2.0).sin() * y)
     }
 
     fn p() -> &'static Path {

@@ -288,6 +288,54 @@ fn network_size<'a>(
     }
 }
 
+/// Test fixture shared by the STEP and IGES writers' and reader's tests: two bicubic patches
+/// side by side over [0, 1] x [0, 1] and [1, 2] x [0, 1] sharing the edge x = 1, each on a 5 x 5
+/// control grid at spacing 0.25 with z = `height(x, y)`.
+#[cfg(test)]
+pub(crate) fn two_patch_network(height: fn(f64, f64) -> f64) -> PatchNetwork {
+    let k = crate::nurbs::params::Params::uniform(2)
+        .unwrap()
+        .cubic_knots();
+    let patch = |x0: f64| {
+        let ctrl = (0..5)
+            .map(|i| {
+                (0..5)
+                    .map(|j| {
+                        let (x, y) = (x0 + i as f64 * 0.25, j as f64 * 0.25);
+                        Point3::new(x, y, height(x, y))
+                    })
+                    .collect()
+            })
+            .collect();
+        BSplineSurface::new(3, 3, k.clone(), k.clone(), ctrl).unwrap()
+    };
+    let (a, b) = (patch(0.0), patch(1.0));
+    let v = vec![
+        a.evaluate(0.0, 0.0),
+        a.evaluate(1.0, 0.0),
+        a.evaluate(1.0, 1.0),
+        a.evaluate(0.0, 1.0),
+        b.evaluate(1.0, 0.0),
+        b.evaluate(1.0, 1.0),
+    ];
+    PatchNetwork::from_patches(
+        v,
+        vec![
+            PatchInput {
+                surface: a,
+                corners: [0, 1, 2, 3],
+                same_sense: true,
+            },
+            PatchInput {
+                surface: b,
+                corners: [1, 4, 5, 2],
+                same_sense: true,
+            },
+        ],
+    )
+    .unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
