@@ -86,13 +86,14 @@ pub fn smooth(c: &mut [Point2<f64>], rounds: usize) {
     }
 }
 
-/// Intersection point of segments ab and cd (proper or touching), if any.
-pub fn segment_hit(
+/// Parameters (t, u) of the intersection a + t (b - a) = c + u (d - c) of segments ab and cd
+/// (proper or touching: both in [0, 1]), if any.
+pub fn segment_hit_params(
     a: Point2<f64>,
     b: Point2<f64>,
     c: Point2<f64>,
     d: Point2<f64>,
-) -> Option<Point2<f64>> {
+) -> Option<(f64, f64)> {
     let r = b - a;
     let s = d - c;
     let den = r.x * s.y - r.y * s.x;
@@ -102,12 +103,28 @@ pub fn segment_hit(
     let q = c - a;
     let t = (q.x * s.y - q.y * s.x) / den;
     let u = (q.x * r.y - q.y * r.x) / den;
-    ((0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u)).then(|| a + r * t)
+    ((0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u)).then_some((t, u))
 }
 
-/// Crossing points between two closed polylines (`same` = a contour with itself: adjacent
-/// segments are skipped).
-pub fn crossings(a: &[Point2<f64>], b: &[Point2<f64>], same: bool) -> Vec<Point2<f64>> {
+/// Intersection point of segments ab and cd (proper or touching), if any.
+pub fn segment_hit(
+    a: Point2<f64>,
+    b: Point2<f64>,
+    c: Point2<f64>,
+    d: Point2<f64>,
+) -> Option<Point2<f64>> {
+    segment_hit_params(a, b, c, d).map(|(t, _)| a + (b - a) * t)
+}
+
+/// Crossings between two closed polylines as (segment i of a, t on it, segment j of b, u on
+/// it), in order of i then j (`same` = a contour with itself: adjacent segments are skipped,
+/// and each pair is visited once, j > i + 1). Segments whose bounding boxes are disjoint are
+/// skipped before the exact test.
+pub fn segment_crossings(
+    a: &[Point2<f64>],
+    b: &[Point2<f64>],
+    same: bool,
+) -> Vec<(usize, f64, usize, f64)> {
     let (na, nb) = (a.len(), b.len());
     let mut out = Vec::new();
     for i in 0..na {
@@ -125,12 +142,24 @@ pub fn crossings(a: &[Point2<f64>], b: &[Point2<f64>], same: bool) -> Vec<Point2
             {
                 continue;
             }
-            if let Some(p) = segment_hit(p0, p1, q0, q1) {
-                out.push(p);
+            if let Some((t, u)) = segment_hit_params(p0, p1, q0, q1) {
+                out.push((i, t, j, u));
             }
         }
     }
     out
+}
+
+/// Crossing points between two closed polylines (`same` = a contour with itself: adjacent
+/// segments are skipped).
+pub fn crossings(a: &[Point2<f64>], b: &[Point2<f64>], same: bool) -> Vec<Point2<f64>> {
+    segment_crossings(a, b, same)
+        .into_iter()
+        .map(|(i, t, _, _)| {
+            let (p0, p1) = (a[i], a[(i + 1) % a.len()]);
+            p0 + (p1 - p0) * t
+        })
+        .collect()
 }
 
 /// A panel: an outer contour (counter-clockwise) and its holes (clockwise), with the index of

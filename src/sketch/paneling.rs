@@ -19,7 +19,7 @@
 //! that layer (the uncovered region a curled tail encloses with the body); a clockwise loop
 //! with no layer around it (a sheet turned over, negative winding) is rejected.
 
-use super::contour::{segment_hit, signed_area};
+use super::contour::{segment_crossings, signed_area};
 use crate::error::{Error, Result};
 use nalgebra::Point2;
 
@@ -34,53 +34,23 @@ pub struct Crossing {
     pub p: Point2<f64>,
 }
 
-/// Parameters (t along ab, u along cd) of the intersection of segments ab and cd.
-fn hit_params(
-    a: Point2<f64>,
-    b: Point2<f64>,
-    c: Point2<f64>,
-    d: Point2<f64>,
-) -> Option<(f64, f64)> {
-    segment_hit(a, b, c, d)?;
-    let r = b - a;
-    let s = d - c;
-    let den = r.x * s.y - r.y * s.x;
-    let q = c - a;
-    Some(((q.x * s.y - q.y * s.x) / den, (q.x * r.y - q.y * r.x) / den))
-}
-
 /// All self-crossings of the closed polyline `c` (adjacent segments skipped; a crossing found
 /// twice at a shared vertex is kept once).
 pub fn self_crossings(c: &[Point2<f64>]) -> Vec<Crossing> {
     let n = c.len();
     let mut out: Vec<Crossing> = Vec::new();
-    for i in 0..n {
+    for (i, ti, j, tj) in segment_crossings(c, c, true) {
         let (p0, p1) = (c[i], c[(i + 1) % n]);
-        let (lo, hi) = (p0.coords.inf(&p1.coords), p0.coords.sup(&p1.coords));
-        for j in i + 2..n {
-            if i == 0 && j == n - 1 {
-                continue;
-            }
-            let (q0, q1) = (c[j], c[(j + 1) % n]);
-            if q0.x.max(q1.x) < lo.x
-                || q0.x.min(q1.x) > hi.x
-                || q0.y.max(q1.y) < lo.y
-                || q0.y.min(q1.y) > hi.y
-            {
-                continue;
-            }
-            if let Some((ti, tj)) = hit_params(p0, p1, q0, q1) {
-                let p = p0 + (p1 - p0) * ti;
-                let scale = (p1 - p0).norm().max((q1 - q0).norm());
-                if out
-                    .iter()
-                    .any(|x| (x.p - p).norm() <= 1e-9 * scale.max(1e-300))
-                {
-                    continue;
-                }
-                out.push(Crossing { i, ti, j, tj, p });
-            }
+        let (q0, q1) = (c[j], c[(j + 1) % n]);
+        let p = p0 + (p1 - p0) * ti;
+        let scale = (p1 - p0).norm().max((q1 - q0).norm());
+        if out
+            .iter()
+            .any(|x| (x.p - p).norm() <= 1e-9 * scale.max(1e-300))
+        {
+            continue;
         }
+        out.push(Crossing { i, ti, j, tj, p });
     }
     out
 }
