@@ -170,6 +170,69 @@ fn bunny_cloud_without_normals() {
     );
 }
 
+/// `--fill-holes rbf` and `planar` close a scan's holes with the local fills of `fill-holes`
+/// before the fit: every hole of the fixture is filled, the deviation is still that of the
+/// scan's own vertices (the fill's vertices are not measurements), the network is closed and
+/// OpenCASCADE reads it as a valid closed shell.
+#[test]
+fn local_hole_fills_before_the_fit() {
+    let input = repo().join("fixtures/holes/spot_holes.ply");
+    let scan = scansurf::io::read_mesh(&input).unwrap();
+    let scan_points = scan.referenced_points().0.len() as f64;
+    let dir = tempfile::tempdir().unwrap();
+    for method in ["rbf", "planar"] {
+        let step = dir.path().join(format!("{method}.step"));
+        let r = fit(&input, &step, &["--fill-holes", method, "--patches", "300"]);
+        let h = &r["hole_fill"];
+        assert_eq!(h["method"], method);
+        assert!(f(h, &["loops"]) >= 1.0, "{h}");
+        assert_eq!(f(h, &["holes_filled"]), f(h, &["loops"]), "{h}");
+        assert!(f(h, &["triangles_added"]) > 0.0, "{h}");
+        assert_eq!(f(&r, &["input_points"]), scan_points);
+        assert_eq!(r["closed"], true);
+        assert_eq!(f(&r, &["free_edges"]), 0.0);
+        let dev = &r["deviation"]["relative"];
+        assert!(f(dev, &["mean"]) <= 3e-4, "{method}: {dev}");
+        let Some((py, script)) = common::checker() else {
+            eprintln!("SKIPPED: cad_check");
+            continue;
+        };
+        let c = common::cad_check(&py, &script, &step, None);
+        assert_eq!(c["valid"], true, "{method}: {c}");
+        assert_eq!(c["closed"], true, "{method}: {c}");
+        assert_eq!(f(&c, &["faces"]), f(&r, &["patches"]));
+    }
+    // A point cloud has no holes to fill locally: a clear error, no file.
+    let cloud = dir.path().join("cloud.xyz");
+    let xyz: String = scan
+        .positions
+        .iter()
+        .map(|p| format!("{} {} {}\n", p.x, p.y, p.z))
+        .collect();
+    std::fs::write(&cloud, xyz).unwrap();
+    let out = dir.path().join("cloud.step");
+    let o = bin()
+        .arg("fit")
+        .arg(&cloud)
+        .args(["-q", "--fill-holes", "rbf", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("needs a triangle mesh"),
+        "{err}"
+    );
+    assert!(err.contains("cloud.xyz") && !out.exists(), "{err}");
+    // The default leaves the closing to the implicit and reports no local fill.
+    let r = fit(
+        &input,
+        &dir.path().join("implicit.step"),
+        &["--patches", "300"],
+    );
+    assert!(r.get("hole_fill").is_none());
+}
+
 /// Bad options fail before any work, with a message, and leave no file behind.
 #[test]
 fn bad_options_leave_nothing() {
@@ -181,6 +244,11 @@ fn bad_options_leave_nothing() {
         ("x.step", vec!["--tolerance=-1"], "tolerance"),
         ("x.step", vec!["--unit", "furlong"], "furlong"),
         ("x.step", vec!["--iges", "y.dxf"], "must end in"),
+        (
+            "x.step",
+            vec!["--fill-holes", "glue"],
+            "expected implicit, none, rbf",
+        ),
     ] {
         let o = bin()
             .arg("fit")

@@ -289,10 +289,12 @@ fn focus_frames_a_ball_and_rejects_an_empty_one() {
     assert_eq!(code, 0, "{err}");
     // A ball around one vertex of spot: what is left is framed to fill the picture too.
     let m = scansurf::io::read_mesh(Path::new(&fixture("spot.obj"))).unwrap();
-    let p = m.positions[0];
-    let focus = format!("--focus={},{},{},0.2", p.x, p.y, p.z);
+    // A vertex with a negative coordinate, passed as a separate argument as users type it
+    // (`--focus -0.3,...` once failed: clap took it for an option).
+    let p = *m.positions.iter().find(|p| p.x < 0.0).unwrap();
     let mut a = args(&near);
-    a.push(focus);
+    a.push("--focus".into());
+    a.push(format!("{},{},{},0.2", p.x, p.y, p.z));
     let (code, _, err) = run(&a.iter().map(|s| s.as_str()).collect::<Vec<_>>());
     assert_eq!(code, 0, "{err}");
     let (sf, sn) = (

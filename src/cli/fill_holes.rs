@@ -27,7 +27,7 @@ pub struct Args {
     #[arg(long, value_name = "K")]
     pub rings: Option<usize>,
     /// Projection direction x,y,z to try first for the planar method.
-    #[arg(long, value_name = "X,Y,Z")]
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub direction: Option<String>,
     /// Do not fall back to the other method when one fails on a hole.
     #[arg(long)]

@@ -4,7 +4,8 @@
 use crate::error::{Error, Result};
 use crate::export::{ExportOptions, LengthUnit, Timestamp};
 use crate::fit::net::PatchSize;
-use crate::fit::pipeline::{fit, FitOptions};
+use crate::fit::pipeline::{fit_measured, FitOptions};
+use crate::holes::{fill_holes, FillMethod, FillOptions};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, clap::Args)]
@@ -33,8 +34,11 @@ pub struct Args {
     /// Fitting tolerance of the implicit surface at the input points (fraction of the diagonal).
     #[arg(long, default_value_t = 2e-4)]
     pub fit_tolerance: f64,
-    /// How holes in a mesh input are closed: `implicit` (the fitted implicit surface closes them
-    /// smoothly, seed 003) or `none` (same; listed for scripts that want to say so explicitly).
+    /// How holes in a mesh input are closed: `implicit` (the fitted implicit surface closes
+    /// them, seed 003; `none` is the same, for scripts that want to say so), or first by the
+    /// local fills of `fill-holes`: `rbf` (local thin-plate RBF, seed 000), `planar` (Delaunay
+    /// with circular arcs, seed 002) or `flat`. Deviation is still measured at the input's
+    /// own points.
     #[arg(long, default_value = "implicit")]
     pub fill_holes: String,
     /// Anisotropic smoothing iterations on a mesh input before fitting (0 = none).
@@ -106,12 +110,14 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     if let Some(p) = &a.deviation_ply {
         check_ext(p, &["ply"], "the deviation cloud")?;
     }
-    if !matches!(a.fill_holes.as_str(), "implicit" | "none") {
-        return Err(Error::InvalidOption(format!(
-            "--fill-holes {}: expected implicit or none",
-            a.fill_holes
-        )));
-    }
+    let local_fill: Option<FillMethod> = match a.fill_holes.as_str() {
+        "implicit" | "none" => None,
+        m => Some(m.parse().map_err(|_| {
+            Error::InvalidOption(format!(
+                "--fill-holes {m}: expected implicit, none, rbf, planar or flat"
+            ))
+        })?),
+    };
     let unit: LengthUnit = a.unit.parse()?;
     let stamp = timestamp(&a)?;
     let size = match (a.patches, a.patch_size) {
@@ -135,6 +141,33 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         let method = crate::smooth::Method::by_name("anisotropic")?.with_iterations(a.smooth);
         crate::smooth::run(&mut input, &adj, &method, None, &Default::default())?;
     }
+    if local_fill.is_some() && input.faces.is_empty() {
+        return Err(Error::content(
+            &a.input,
+            format!(
+                "is a point cloud; --fill-holes {} needs a triangle mesh (the implicit closes \
+                 the holes of a cloud: use --fill-holes implicit)",
+                a.fill_holes
+            ),
+        ));
+    }
+    // The scan's own points: what the deviation is measured at, whatever the fill adds.
+    let (measured, _) = input.referenced_points();
+    let hole_fill = match local_fill {
+        Some(method) => {
+            let spinner = super::progress::spinner("filling holes", quiet);
+            let fill = FillOptions {
+                method,
+                ..FillOptions::default()
+            };
+            let (filled, report) =
+                fill_holes(&input, &fill).map_err(|e| super::with_input(e, &a.input))?;
+            spinner.finish_and_clear();
+            input = filled;
+            Some(report)
+        }
+        None => None,
+    };
     let mut opts = FitOptions {
         size,
         tolerance: a.tolerance,
@@ -147,9 +180,10 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         bar.set_prefix(stage.to_string());
         bar.set_position((frac.clamp(0.0, 1.0) * 100.0) as u64);
     };
-    let (network, report) =
-        fit(&input, &opts, &mut progress).map_err(|e| super::with_input(e, &a.input))?;
+    let (network, mut report) = fit_measured(&input, &measured, &opts, &mut progress)
+        .map_err(|e| super::with_input(e, &a.input))?;
     bar.finish_and_clear();
+    report.hole_fill = hole_fill;
 
     let name = |p: &Path| {
         p.file_name()
@@ -176,7 +210,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     if let Some(r) = &a.report {
         super::write_json(r, &report)?;
     }
-    let (pts, _) = input.referenced_points();
+    let pts = measured;
     if let Some(d) = &a.deviation_ply {
         let dist = &report.deviation.distances;
         let scale = crate::render::ColorScale::auto(dist)?;

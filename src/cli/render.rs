@@ -36,7 +36,7 @@ pub struct Args {
     pub size: String,
     /// Draw only what lies within R of (X, Y, Z), framed to fill the picture: e.g. a spot the
     /// `fit` report lists among its largest normal jumps.
-    #[arg(long, value_name = "X,Y,Z,R")]
+    #[arg(long, value_name = "X,Y,Z,R", allow_hyphen_values = true)]
     pub focus: Option<String>,
     /// Subsample point clouds above this many points (voxel grid) before drawing.
     #[arg(long)]

@@ -82,13 +82,29 @@ pub struct FitReport {
     pub deviation: PatchDeviation,
     /// Normal jump across shared patch edges, in degrees.
     pub continuity: ContinuityReport,
+    /// The local hole filling run before the fit (`--fill-holes rbf|planar|flat`), if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hole_fill: Option<crate::holes::FillReport>,
     pub timings: FitTimings,
 }
 
 /// Fits a patch network to a point cloud or mesh. `progress(stage, fraction)` is called as
-/// stages start.
+/// stages start. The deviation is that of the input's (referenced) points.
 pub fn fit(
     input: &Mesh,
+    opts: &FitOptions,
+    progress: &mut dyn FnMut(&str, f64),
+) -> Result<(PatchNetwork, FitReport)> {
+    let (pts, _) = input.referenced_points();
+    fit_measured(input, &pts, opts, progress)
+}
+
+/// [`fit`] with the deviation measured at `measured` instead of the input's points: the scan
+/// points when `input` is a scan with holes filled by added triangles, whose new vertices are
+/// not measurements.
+pub fn fit_measured(
+    input: &Mesh,
+    measured: &[nalgebra::Point3<f64>],
     opts: &FitOptions,
     progress: &mut dyn FnMut(&str, f64),
 ) -> Result<(PatchNetwork, FitReport)> {
@@ -158,8 +174,7 @@ pub fn fit(
 
     progress("deviation", 0.85);
     let t = Instant::now();
-    let (pts, _) = input.referenced_points();
-    let deviation = deviation_from_patches(&network, &pts, diag);
+    let deviation = deviation_from_patches(&network, measured, diag);
     timings.deviation = t.elapsed().as_secs_f64();
 
     progress("continuity", 0.95);
@@ -178,7 +193,7 @@ pub fn fit(
         .collect();
     let uses = network.edge_use_counts();
     let report = FitReport {
-        input_points: pts.len(),
+        input_points: measured.len(),
         normal_source: op.source,
         normals_flipped: op.flipped,
         normals_estimated: op.estimated,
@@ -198,6 +213,7 @@ pub fn fit(
         closed: network.closed,
         deviation,
         continuity,
+        hole_fill: None,
         timings,
     };
     Ok((network, report))
