@@ -20,13 +20,13 @@
 
 use super::flip::delaunay_flips;
 use super::neighbourhood::{ring_vertices, VertexFaces};
-use super::newton_project::{project_along, project_gradient};
 use super::patch::Patch;
 use super::plane::Frame;
 use super::recursive_mesh::{recursive_mesh, SplitWeights};
 use super::relax::relax_on_surface;
 use super::split::{fill_ring, Projection};
 use crate::error::{Error, Result};
+use crate::implicit::project::{project_along_within, project_gradient_within};
 use crate::implicit::Implicit;
 use crate::mesh::Mesh;
 use nalgebra::{Point2, Point3, Vector3};
@@ -135,8 +135,8 @@ pub fn fill_on_surface(
             let mut ids: Vec<u32> = r.to_vec();
             for q in &pm.points[r.len()..] {
                 let start = frame.to_3d(q);
-                let x = project_along(surface, &start, &frame.normal, max_dist, tol)
-                    .or_else(|| project_gradient(surface, &start, max_dist, tol))
+                let x = project_along_within(surface, &start, &frame.normal, max_dist, tol)
+                    .or_else(|| project_gradient_within(surface, &start, max_dist, tol))
                     .ok_or_else(|| {
                         Error::Numerical(
                             "a fill node has no surface point along the plane normal".into(),
@@ -155,7 +155,7 @@ pub fn fill_on_surface(
         let mut out = Vec::with_capacity(pieces.saturating_sub(1));
         for k in 1..pieces {
             let start = pa + (pb - pa) * (k as f64 / pieces as f64);
-            let x = project_gradient(surface, &start, max_dist, tol).ok_or_else(|| {
+            let x = project_gradient_within(surface, &start, max_dist, tol).ok_or_else(|| {
                 Error::Numerical("a chord node has no surface point nearby".into())
             })?;
             let nrm = unit_gradient(surface, &x).unwrap_or_else(Vector3::z);

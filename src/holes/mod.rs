@@ -43,7 +43,6 @@ pub mod fill_rbf;
 pub mod flip;
 pub mod intersect;
 pub mod neighbourhood;
-pub mod newton_project;
 pub mod normal_fit;
 pub mod patch;
 pub mod plane;
@@ -616,7 +615,7 @@ fn measure(p: &Patch, surface: &dyn Implicit, vertices: bool, hr: &mut HoleRepor
     let mut d: Vec<f64> = if vertices {
         p.positions[p.ring_len()..]
             .iter()
-            .map(|x| newton_project::distance_estimate(surface, x))
+            .map(|x| crate::implicit::project::distance_estimate(surface, x))
             .collect()
     } else {
         Vec::with_capacity(p.faces.len())
@@ -628,7 +627,7 @@ fn measure(p: &Patch, surface: &dyn Implicit, vertices: bool, hr: &mut HoleRepor
                 + p.positions[f[2] as usize].coords)
                 / 3.0,
         );
-        d.push(newton_project::distance_estimate(surface, &c));
+        d.push(crate::implicit::project::distance_estimate(surface, &c));
     }
     if d.is_empty() {
         return;

@@ -9,8 +9,8 @@
 //! close to the surface, and the next sweep moves the vertex again); the last sweep converges
 //! and leaves each moved vertex's normal set to the surface's.
 
-use super::newton_project::project_gradient_with_normal;
 use super::patch::Patch;
+use crate::implicit::project::project_gradient_with_normal;
 use crate::implicit::Implicit;
 use nalgebra::{Point3, Vector3};
 

@@ -2,9 +2,23 @@
 //! projection", seed 000 eq. 8-12).
 //!
 //! Along the gradient: `x <- x - f(x) grad f(x) / |grad f(x)|^2` (the closest-point Newton step
-//! for an implicit that is about a distance). Along a fixed direction `d` (seed 000 eq. 8-12, one
-//! unknown `t` on the line `x0 + t d`): `t <- t - f / (grad f . d)`. Steps are limited in length
-//! so that a poor start cannot jump across the model; failure to converge is an `Err`.
+//! for an implicit that is about a distance; seed 000 eq. 11). Along a fixed direction `d` (seed
+//! 000 eq. 8-12, one unknown `lambda` on the line `r0 + lambda d`):
+//!
+//! ```text
+//! r(lambda) = r0 + lambda N                           (eq. 8)
+//! lambda_{i+1} = lambda_i - F(lambda_i) / F'(lambda_i)  (eq. 9)
+//! F'(lambda) = N . grad f(r(lambda))                   (eq. 10, 12)
+//! ```
+//!
+//! Two step policies, one per use:
+//! - [`project`] (the reconstruction's subdivision and relaxation): steps clamped to
+//!   `max_step` so that a poor start cannot jump across the model; failure to converge is an
+//!   `Err`.
+//! - [`project_along_within`] and [`project_gradient_within`] (the hole fills): safeguarded, a
+//!   step is halved while it does not decrease |f|, and the point may move at most `max_dist`
+//!   from where it started; `None` when that fails, so the caller can fall back rather than
+//!   place a node far off.
 
 use super::Implicit;
 use crate::{Error, Result};
@@ -68,42 +82,127 @@ pub fn project<F: Implicit + ?Sized>(
     )))
 }
 
-/// Projects `x0` onto f = 0 along the line `x0 + t dir` (seed 000 eq. 8-12). Returns the point
-/// and the number of steps.
-pub fn project_along<F: Implicit + ?Sized>(
-    f: &F,
-    x0: &Point3<f64>,
+// Safeguarded projections (seed 000 eq. 8-12, the hole fills): a step is halved while it does
+// not decrease |f|, and the point may move at most `max_dist` from where it started; `None`
+// when that fails, so the caller can fall back rather than place a node far off.
+
+/// Iterations of the safeguarded projections.
+const MAX_ITER: usize = 40;
+
+/// The intersection of the line `r0 + lambda dir` with f = 0 nearest along Newton's path, within
+/// `max_dist` of `r0`; converged when |f| <= `tol`.
+pub fn project_along_within(
+    f: &dyn Implicit,
+    r0: &Point3<f64>,
     dir: &Vector3<f64>,
-    opts: &ProjectOptions,
-) -> Result<(Point3<f64>, usize)> {
-    let d = dir
-        .try_normalize(1e-300)
-        .ok_or_else(|| Error::Degenerate("zero projection direction".into()))?;
-    let mut t = 0.0;
-    for it in 0..=opts.max_iterations {
-        let x = x0 + d * t;
-        let (v, g) = f.value_and_gradient(&x);
-        if !v.is_finite() {
-            return Err(Error::Numerical("implicit value is not finite".into()));
-        }
-        if v.abs() <= opts.tolerance {
-            return Ok((x, it));
-        }
-        if it == opts.max_iterations {
-            break;
-        }
-        let gd = g.dot(&d);
-        if !gd.is_finite() || gd.abs() <= 1e-12 * g.norm().max(1e-300) {
-            return Err(Error::Numerical(
-                "projection direction is tangent to the surface".into(),
-            ));
-        }
-        t -= (v / gd).clamp(-opts.max_step, opts.max_step);
+    max_dist: f64,
+    tol: f64,
+) -> Option<Point3<f64>> {
+    let dn = dir.norm();
+    if !(dn > 0.0 && dn.is_finite()) {
+        return None;
     }
-    Err(Error::Numerical(format!(
-        "projection did not converge in {} steps",
-        opts.max_iterations
-    )))
+    let d = dir / dn;
+    let mut lambda = 0.0;
+    let (mut fv, mut g) = f.value_and_gradient(r0);
+    for _ in 0..MAX_ITER {
+        if !fv.is_finite() {
+            return None;
+        }
+        if fv.abs() <= tol {
+            return Some(r0 + d * lambda);
+        }
+        let slope = d.dot(&g);
+        if slope.is_nan() || slope.abs() <= 1e-12 {
+            return None;
+        }
+        let mut step = -fv / slope;
+        step = step.clamp(-max_dist, max_dist);
+        let mut accepted = false;
+        for _ in 0..12 {
+            let l = lambda + step;
+            if l.abs() <= max_dist {
+                let (fn_, gn) = f.value_and_gradient(&(r0 + d * l));
+                if fn_.is_finite() && fn_.abs() < fv.abs() {
+                    lambda = l;
+                    fv = fn_;
+                    g = gn;
+                    accepted = true;
+                    break;
+                }
+            }
+            step *= 0.5;
+        }
+        if !accepted {
+            return None;
+        }
+    }
+    (fv.abs() <= tol * 10.0).then(|| r0 + d * lambda)
+}
+
+/// Projects `x0` onto f = 0 along the gradient (x <- x - f grad f / |grad f|^2), within
+/// `max_dist` of `x0`.
+pub fn project_gradient_within(
+    f: &dyn Implicit,
+    x0: &Point3<f64>,
+    max_dist: f64,
+    tol: f64,
+) -> Option<Point3<f64>> {
+    project_gradient_with_normal(f, x0, max_dist, tol).map(|(x, _)| x)
+}
+
+/// [`project_gradient_within`], also returning grad f at the result (evaluated there anyway).
+pub fn project_gradient_with_normal(
+    f: &dyn Implicit,
+    x0: &Point3<f64>,
+    max_dist: f64,
+    tol: f64,
+) -> Option<(Point3<f64>, Vector3<f64>)> {
+    let mut x = *x0;
+    let (mut fv, mut g) = f.value_and_gradient(&x);
+    for _ in 0..MAX_ITER {
+        if !fv.is_finite() {
+            return None;
+        }
+        if fv.abs() <= tol {
+            return Some((x, g));
+        }
+        let g2 = g.norm_squared();
+        if g2.is_nan() || g2 <= 1e-24 {
+            return None;
+        }
+        let mut step = -g * (fv / g2);
+        let mut accepted = false;
+        for _ in 0..12 {
+            let y = x + step;
+            if (y - x0).norm() <= max_dist {
+                let (fy, gy) = f.value_and_gradient(&y);
+                if fy.is_finite() && fy.abs() < fv.abs() {
+                    x = y;
+                    fv = fy;
+                    g = gy;
+                    accepted = true;
+                    break;
+                }
+            }
+            step *= 0.5;
+        }
+        if !accepted {
+            return None;
+        }
+    }
+    (fv.abs() <= tol * 10.0).then_some((x, g))
+}
+
+/// Distance estimate |f| / |grad f| of `x` from the surface.
+pub fn distance_estimate(f: &dyn Implicit, x: &Point3<f64>) -> f64 {
+    let (v, g) = f.value_and_gradient(x);
+    let gn = g.norm();
+    if gn > 0.0 {
+        v.abs() / gn
+    } else {
+        v.abs()
+    }
 }
 
 #[cfg(test)]
@@ -135,22 +234,41 @@ mod tests {
         let (p, it) = project(&Sphere, &Point3::new(0.5, 0.4, 0.9), &o).unwrap();
         assert!((p.coords.norm() - 1.0).abs() < 1e-6);
         assert!(it <= 10);
-        let (p, _) = project_along(
+        let p = project_along_within(
             &Sphere,
             &Point3::new(0.0, 0.0, 0.2),
             &Vector3::new(0.0, 1.0, 1.0),
-            &o,
+            1.0,
+            1e-12,
         )
         .unwrap();
-        assert!((p.coords.norm() - 1.0).abs() < 1e-6);
+        assert!((p.coords.norm() - 1.0).abs() < 1e-12);
         assert!(p.x.abs() < 1e-12 && p.y > 0.0);
+        let p = project_along_within(
+            &Sphere,
+            &Point3::new(0.3, 0.2, 0.5),
+            &Vector3::z(),
+            1.0,
+            1e-12,
+        )
+        .unwrap();
+        assert!((p.x - 0.3).abs() < 1e-15 && (p.y - 0.2).abs() < 1e-15 && p.z > 0.9);
+        let q = project_gradient_within(&Sphere, &Point3::new(0.0, 0.0, 1.3), 1.0, 1e-12).unwrap();
+        assert!((q.z - 1.0).abs() < 1e-12);
+        assert!((distance_estimate(&Sphere, &Point3::new(0.0, 2.0, 0.0)) - 1.0).abs() < 1e-12);
     }
 
     #[test]
-    fn failures_are_errors() {
+    fn failures_are_errors_or_none() {
         let o = ProjectOptions::for_diagonal(1.0);
         assert!(project(&Flat, &Point3::origin(), &o).is_err());
-        assert!(project_along(&Sphere, &Point3::origin(), &Vector3::zeros(), &o).is_err());
+        let origin = Point3::origin();
+        assert!(project_along_within(&Sphere, &origin, &Vector3::zeros(), 1.0, 1e-9).is_none());
+        // A line that misses the sphere; a start too far for max_dist.
+        let x = Point3::new(2.0, 0.0, 0.0);
+        assert!(project_along_within(&Sphere, &x, &Vector3::z(), 5.0, 1e-12).is_none());
+        let z = Point3::new(0.0, 0.0, 3.0);
+        assert!(project_gradient_within(&Sphere, &z, 1.0, 1e-12).is_none());
         let few = ProjectOptions {
             max_iterations: 2,
             max_step: 1e-3,
