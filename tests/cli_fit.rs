@@ -170,6 +170,43 @@ fn bunny_cloud_without_normals() {
     );
 }
 
+/// The bar for the other models, default options: spot, fandisk and cow fit to a
+/// closed shell whose deviation from the input vertices has mean_rel <= 3e-4 (our point
+/// inversion; for the cow also OpenCASCADE's, with validity and sewing). The cow's horns are thinner than a voxel: before the medial voxels of
+/// `polygonize::voxel_net` the net left them out and the mean was 3.7e-4.
+#[test]
+fn spot_fandisk_and_cow_meet_the_mean_deviation_bar() {
+    let Some(bunny) = bunny() else { return };
+    let data = bunny.parent().unwrap().to_path_buf();
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["spot", "fandisk", "cow"] {
+        let input = data.join(format!("{name}.obj"));
+        let step = dir.path().join(format!("{name}.step"));
+        let r = fit(&input, &step, &[]);
+        assert_eq!(r["closed"], true, "{name}");
+        assert_eq!(f(&r, &["net", "components"]), 1.0, "{name}");
+        assert!(
+            f(&r["deviation"]["relative"], &["mean"]) <= 3e-4,
+            "{name}: {}",
+            r["deviation"]
+        );
+        // OpenCASCADE's deviation needs a tessellation of the whole STEP file (about a minute
+        // per model here): checked on the cow, the model at risk.
+        if name != "cow" {
+            continue;
+        }
+        let Some((py, script)) = common::checker() else {
+            eprintln!("SKIPPED: cad_check");
+            continue;
+        };
+        let c = common::cad_check(&py, &script, &step, Some(&input));
+        assert_eq!(c["valid"], true, "{name}: {c}");
+        assert_eq!(c["closed"], true, "{name}: {c}");
+        assert_eq!(f(&c, &["free_edges"]), 0.0, "{name}: {c}");
+        assert!(f(&c["deviation"], &["mean_rel"]) <= 3e-4, "{name}: {c}");
+    }
+}
+
 /// `--fill-holes rbf` and `planar` close a scan's holes with the local fills of `fill-holes`
 /// before the fit: every hole of the fixture is filled, the deviation is still that of the
 /// scan's own vertices (the fill's vertices are not measurements), the network is closed and

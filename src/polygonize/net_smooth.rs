@@ -20,7 +20,7 @@
 //! flipped + degenerate quads, then the largest minimum angle, then the largest mean) is kept.
 
 use super::net_quality::{node_residuals, quad_normals, quad_shape, quality_with, NetQuality};
-use super::newton::{project, solve_on_line_facing, NewtonOptions};
+use super::newton::{project, solve_on_line, solve_on_line_facing, NewtonOptions};
 use super::quad_net::QuadNet;
 use crate::implicit::Implicit;
 use crate::{Error, Result};
@@ -196,7 +196,8 @@ fn project_on_lines<I: Implicit + ?Sized>(
                 .flatten()
             {
                 Some((s, g)) => Ok((p + n * s, g)),
-                None => project(f, p, opt),
+                None => project(f, p, opt)
+                    .or_else(|e| nearest_on_lattice_lines(f, p, s_max, opt.tol).ok_or(e)),
             };
             match (solved, fallback) {
                 (Ok((q, g)), _) => Ok((q, g.try_normalize(0.0).unwrap_or_else(Vector3::zeros))),
@@ -206,6 +207,37 @@ fn project_on_lines<I: Implicit + ?Sized>(
         })
         .collect::<Result<_>>()?;
     Ok(out.into_iter().unzip())
+}
+
+/// Last resort for a node that neither its line nor Newton along the gradient brings onto
+/// f = 0 (Newton stalls at a local minimum of |f| between two thin parts, e.g. a leg and a
+/// horn a voxel apart): the nearest root on the 13 lattice lines through `p` (axes, face and
+/// body diagonals), each searched within `s_max`.
+fn nearest_on_lattice_lines<I: Implicit + ?Sized>(
+    f: &I,
+    p: Point3<f64>,
+    s_max: f64,
+    tol: f64,
+) -> Option<(Point3<f64>, Vector3<f64>)> {
+    let mut best: Option<(f64, Point3<f64>, Vector3<f64>)> = None;
+    for m in 0..27 {
+        let d = Vector3::new(
+            (m % 3) as f64 - 1.0,
+            (m / 3 % 3) as f64 - 1.0,
+            (m / 9) as f64 - 1.0,
+        );
+        // One of each pair of opposite directions: the line search covers both signs.
+        if m <= 13 {
+            continue;
+        }
+        let w = d.normalize();
+        if let Ok((s, g)) = solve_on_line(f, p, w, s_max, tol) {
+            if best.as_ref().is_none_or(|b| s.abs() < b.0) {
+                best = Some((s.abs(), p + w * s, g));
+            }
+        }
+    }
+    best.map(|(_, q, g)| (q, g))
 }
 
 /// Tangential move of every node toward its relaxation target.
