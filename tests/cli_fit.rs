@@ -47,6 +47,12 @@ fn bunny_step_is_valid_closed_and_accurate() {
     );
     assert_eq!(r["closed"], true);
     assert_eq!(f(&r, &["free_edges"]), 0.0);
+    // Only the base holes are closed without data (0.4 % of the area).
+    assert!(
+        f(&r, &["support", "unsupported_fraction"]) < 0.01,
+        "{}",
+        r["support"]
+    );
     // Our own measure (exact edge parameters) of the normal jump.
     assert!(
         f(&r, &["continuity", "all_deg", "p95"]) <= 1.0,
@@ -205,6 +211,36 @@ fn spot_fandisk_and_cow_meet_the_mean_deviation_bar() {
         assert_eq!(f(&c, &["free_edges"]), 0.0, "{name}: {c}");
         assert!(f(&c["deviation"], &["mean_rel"]) <= 3e-4, "{name}: {c}");
     }
+}
+
+/// Surface the data does not back is measured and warned about: the Utah teapot's open
+/// bottom and lid gap are closed by the implicit, 7 % of the patch area lies more than half a
+/// patch from every input point; the bunny's base holes are 0.4 %.
+#[test]
+fn extrapolated_area_is_reported_and_warned() {
+    let Some(bunny) = bunny() else { return };
+    let input = bunny.parent().unwrap().join("teapot.obj");
+    let dir = tempfile::tempdir().unwrap();
+    let (step, report) = (dir.path().join("t.step"), dir.path().join("t.json"));
+    let o = bin()
+        .arg("fit")
+        .arg(&input)
+        .arg("-q")
+        .arg("-o")
+        .arg(&step)
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let frac = f(&r, &["support", "unsupported_fraction"]);
+    assert!(frac > 0.05 && frac < 0.2, "{}", r["support"]);
+    assert!(
+        err.contains("warning:") && err.contains("extrapolation"),
+        "{err}"
+    );
 }
 
 /// `--fill-holes rbf` and `planar` close a scan's holes with the local fills of `fill-holes`

@@ -66,6 +66,9 @@ pub struct Args {
     pub timestamp: Option<String>,
 }
 
+/// Unsupported patch area (fraction) above which `fit` warns.
+const UNSUPPORTED_WARNING: f64 = 0.05;
+
 fn check_ext(path: &Path, allowed: &[&str], what: &str) -> Result<()> {
     let ext = path
         .extension()
@@ -227,6 +230,16 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
             ..crate::render::RenderOptions::default()
         };
         crate::render::patches::network_preview(&network, &pts, dist, &opts)?.save_png(p)?;
+    }
+    let support = &report.support;
+    if support.unsupported_fraction > UNSUPPORTED_WARNING {
+        eprintln!(
+            "warning: {:.1}% of the patch area lies farther than {:.3e} (half a patch) from every \
+             input point: the implicit closed openings there by extrapolation, not from data \
+             (report: support); check those parts in a viewer",
+            100.0 * support.unsupported_fraction,
+            support.threshold
+        );
     }
     if !quiet {
         let dev = &report.deviation.stats.relative;

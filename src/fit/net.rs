@@ -119,6 +119,7 @@ pub fn fit_net<I: Implicit + ?Sized>(
         PatchSize::Edge(_) => None,
     };
     let mut candidates: Vec<PlacementTry> = Vec::new();
+    let mut first_error: Option<Error> = None;
     let mut best: Option<(usize, QuadNet, SmoothReport, VoxelNetStats)> = None;
     for (k, frac) in [0.0, 1.0 / 3.0, 2.0 / 3.0].into_iter().enumerate() {
         let (mut net, stats) = if k == 0 {
@@ -141,8 +142,12 @@ pub fn fit_net<I: Implicit + ?Sized>(
                 continue;
             }
         }
-        let Ok(smoothing) = project_and_smooth(&mut net, f, &SmoothOptions::new(scale, h)) else {
-            continue;
+        let smoothing = match project_and_smooth(&mut net, f, &SmoothOptions::new(scale, h)) {
+            Ok(s) => s,
+            Err(e) => {
+                first_error.get_or_insert(e);
+                continue;
+            }
         };
         let folds = smoothing.smoothed.flipped + smoothing.smoothed.degenerate;
         let crossing = crossing_edges(f, &net);
@@ -158,9 +163,14 @@ pub fn fit_net<I: Implicit + ?Sized>(
         }
     }
     let Some((_, net, smoothing, voxel_stats)) = best else {
-        return Err(Error::Numerical(
-            "the quad net could not be projected onto the surface".into(),
-        ));
+        let why = first_error.map_or_else(String::new, |e| format!(" ({e})"));
+        return Err(Error::Numerical(format!(
+            "the quad net could not be projected onto the implicit surface{why}: parts of the \
+             net lie where the implicit has no zero set within a voxel. This happens when the \
+             input is not the surface of a solid the implicit can close (an open shell such \
+             as a car body with its windows and underside open); `scansurf reconstruct INPUT \
+             -o check.ply` shows the implicit"
+        )));
     };
     let report = NetReport {
         h,

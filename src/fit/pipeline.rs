@@ -11,7 +11,11 @@ use crate::implicit::pou::{FitOptions as ImplicitOptions, FitStats, PouImplicit}
 use crate::mesh::{Aabb, Mesh};
 use crate::normals::{oriented_points, NormalSource};
 use crate::nurbs::{BSplineSurface, Params, PatchGrid, PatchInput, PatchNetwork, Twist};
-use crate::quality::{deviation_from_patches, normal_jumps, ContinuityReport, PatchDeviation};
+use crate::quality::{
+    deviation_from_patches, normal_jumps, surface_support, ContinuityReport, PatchDeviation,
+    SupportReport,
+};
+use crate::spatial::KdTree;
 use crate::{Error, Result};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -82,6 +86,9 @@ pub struct FitReport {
     pub deviation: PatchDeviation,
     /// Normal jump across shared patch edges, in degrees.
     pub continuity: ContinuityReport,
+    /// Patch area farther than half a voxel (h / 2) from every point the implicit was fitted
+    /// to: surface the data does not back (openings closed by extrapolation).
+    pub support: SupportReport,
     /// The local hole filling run before the fit (`--fill-holes rbf|planar|flat`), if any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hole_fill: Option<crate::holes::FillReport>,
@@ -139,6 +146,10 @@ pub fn fit_measured(
     let tol = opts.tolerance * diag;
     let sampling = sample_patches(&net, &f, &SampleOptions::new(tol, diag))?;
     timings.sampling = t.elapsed().as_secs_f64();
+    let data = KdTree::build(&op.points)?;
+    let grids: Vec<&Vec<Vec<nalgebra::Point3<f64>>>> =
+        sampling.patches.iter().map(|p| &p.points).collect();
+    let support = surface_support(&grids, &data, 0.5 * net_report.h);
 
     progress("patches", 0.7);
     let t = Instant::now();
@@ -213,6 +224,7 @@ pub fn fit_measured(
         closed: network.closed,
         deviation,
         continuity,
+        support,
         hole_fill: None,
         timings,
     };

@@ -5,6 +5,8 @@
 
 pub mod continuity;
 pub mod patch_deviation;
+pub mod support;
 
 pub use continuity::{normal_jumps, ContinuityReport};
 pub use patch_deviation::{deviation_from_patches, PatchDeviation};
+pub use support::{surface_support, SupportReport};

@@ -1,0 +1,97 @@
+//! How much of a fitted surface the data backs: the area of the patch sample grids farther
+//! than a threshold from every input point.
+//!
+//! The deviation of the input points from the patches is one-sided: a patch that wanders where
+//! there are no points (an implicit closing a large opening by extrapolation, a spurious
+//! sheet) does not raise it. This measure is the other side, on the sample grids every patch
+//! interpolates: each grid cell (four neighbouring samples on f = 0) counts with its area
+//! A = |d1 x d2| / 2 (d1, d2 its diagonals), and is *unsupported* when its centre lies
+//! farther than the threshold from the nearest input point. The fraction of unsupported area
+//! is what `fit` reports and warns about.
+
+use crate::spatial::KdTree;
+use nalgebra::Point3;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Support of a surface by the data.
+#[derive(Debug, Clone, Default, Serialize, PartialEq)]
+pub struct SupportReport {
+    /// Distance beyond which a cell is unsupported (model units).
+    pub threshold: f64,
+    /// Total area of the sample-grid cells (model units squared).
+    pub area: f64,
+    /// Area of the unsupported cells, and its fraction of `area`.
+    pub unsupported_area: f64,
+    pub unsupported_fraction: f64,
+}
+
+/// Measures the support of the surfaces sampled by `grids` (each `points[i][j]`, i along u,
+/// j along v) by the points in `data`.
+pub fn surface_support(
+    grids: &[&Vec<Vec<Point3<f64>>>],
+    data: &KdTree,
+    threshold: f64,
+) -> SupportReport {
+    let (area, unsupported) = grids
+        .par_iter()
+        .map(|g| {
+            let mut a = (0.0, 0.0);
+            for i in 0..g.len().saturating_sub(1) {
+                for j in 0..g[i]
+                    .len()
+                    .saturating_sub(1)
+                    .min(g[i + 1].len().saturating_sub(1))
+                {
+                    let (p00, p10, p01, p11) = (g[i][j], g[i + 1][j], g[i][j + 1], g[i + 1][j + 1]);
+                    let cell = 0.5 * (p11 - p00).cross(&(p01 - p10)).norm();
+                    if !cell.is_finite() {
+                        continue;
+                    }
+                    let c = Point3::from((p00.coords + p10.coords + p01.coords + p11.coords) / 4.0);
+                    a.0 += cell;
+                    if data.nearest(&c).1 > threshold {
+                        a.1 += cell;
+                    }
+                }
+            }
+            a
+        })
+        .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
+    SupportReport {
+        threshold,
+        area,
+        unsupported_area: unsupported,
+        unsupported_fraction: if area > 0.0 { unsupported / area } else { 0.0 },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit square sampled on a 10 x 10 grid, data on its left half only: the right half
+    /// beyond the threshold is unsupported.
+    #[test]
+    fn half_covered_square() {
+        let grid: Vec<Vec<Point3<f64>>> = (0..=10)
+            .map(|i| {
+                (0..=10)
+                    .map(|j| Point3::new(i as f64 / 10.0, j as f64 / 10.0, 0.0))
+                    .collect()
+            })
+            .collect();
+        let data: Vec<Point3<f64>> = (0..=50)
+            .flat_map(|i| {
+                (0..=100).map(move |j| Point3::new(i as f64 / 100.0, j as f64 / 100.0, 0.0))
+            })
+            .collect();
+        let tree = KdTree::build(&data).unwrap();
+        let r = surface_support(&[&grid], &tree, 0.12);
+        assert!((r.area - 1.0).abs() < 1e-12, "{r:?}");
+        // Cell centres at x = 0.05, 0.15, ...: those at x >= 0.65 are more than 0.12 from x = 0.5.
+        assert!((r.unsupported_fraction - 0.4).abs() < 1e-12, "{r:?}");
+        let all = surface_support(&[&grid], &tree, 1.0);
+        assert_eq!(all.unsupported_area, 0.0);
+    }
+}
