@@ -481,7 +481,11 @@ impl<I: Implicit + ?Sized> Builder<'_, I> {
         }
         if !supported.contains(&true) {
             return Err(Error::Degenerate(
-                "no component of the quad net lies near the seed points".into(),
+                "no component of the quad net lies near the seed points: the implicit's zero \
+                 set does not follow the input (an open sheet of points, such as one side of a \
+                 part, can give an implicit that closes away from the data; `scansurf \
+                 reconstruct` shows it)"
+                    .into(),
             ));
         }
         self.stats.dropped_components = supported.iter().filter(|&&s| !s).count();
