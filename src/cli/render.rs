@@ -21,8 +21,8 @@ pub struct Args {
     #[arg(long, value_name = "CLOUD")]
     pub against: Option<PathBuf>,
     /// Colour the input by the deviation of the scan points stored in this `fit
-    /// --deviation-ply` file (each surface point takes the value of its nearest scan point;
-    /// scale 0 to the 99th percentile), with a legend.
+    /// --deviation-ply` file (each surface point takes the inverse-distance weighted
+    /// value of its 8 nearest scan points; scale 0 to the 99th percentile), with a legend.
     #[arg(long, value_name = "D.ply", conflicts_with = "against")]
     pub deviation: Option<PathBuf>,
     /// iso, front, top or side.

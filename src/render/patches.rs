@@ -134,8 +134,8 @@ pub fn network_faces(net: &PatchNetwork) -> Vec<FaceRef<'_>> {
 
 /// The picture `scansurf fit --preview` writes: the fitted network with its patch boundaries,
 /// coloured by the deviation of the input points when `deviation` gives one distance per
-/// point of `points` (each surface vertex takes the deviation of its nearest input point; the
-/// scale runs from 0 to the 99th percentile so a few outliers do not wash it out), else shaded
+/// point of `points` (each surface vertex takes the inverse-distance weighted deviation of its
+/// nearest input points; the scale runs from 0 to the 99th percentile so a few outliers do not wash it out), else shaded
 /// grey.
 pub fn network_preview(
     net: &PatchNetwork,
@@ -161,8 +161,8 @@ pub fn network_preview(
 }
 
 /// Per-vertex scalars and their colour scale for a surface coloured by the deviation of nearby
-/// input points: each vertex of `surface` takes `deviation[k]` of its nearest point
-/// `points[k]`; the scale runs from 0 to the 99th percentile of the finite deviations, so a few
+/// input points: each vertex of `surface` takes the inverse-distance weighted mean of
+/// `deviation` over its nearest `points` ([`interpolated_values`]); the scale runs from 0 to the 99th percentile of the finite deviations, so a few
 /// outliers do not wash it out. `None` when no deviation is finite.
 pub fn point_deviation_colours(
     surface: &[Point3<f64>],
@@ -191,11 +191,20 @@ pub fn point_deviation_colours(
     } else {
         ColorScale::auto(&finite)?
     };
-    Ok(Some((nearest_values(surface, points, deviation)?, scale)))
+    Ok(Some((
+        interpolated_values(surface, points, deviation)?,
+        scale,
+    )))
 }
 
-/// For every query point, `values[k]` of its nearest point `points[k]` (k-d tree).
-fn nearest_values(
+/// Neighbours whose values [`interpolated_values`] blends.
+const BLEND: usize = 8;
+
+/// For every query point, the inverse-distance weighted mean (weights 1 / d^2) of the finite
+/// `values` of its [`BLEND`] nearest `points` (k-d tree); a query on a point takes its value.
+/// On a sparse cloud (a few thousand mesh vertices) the nearest value alone paints each
+/// patch in Voronoi cells of the points; the blend shades smoothly between them.
+fn interpolated_values(
     queries: &[Point3<f64>],
     points: &[Point3<f64>],
     values: &[f64],
@@ -203,7 +212,27 @@ fn nearest_values(
     let tree = crate::spatial::KdTree::build(points)?;
     Ok(queries
         .par_iter()
-        .map(|q| values[tree.nearest(q).0])
+        .map(|q| {
+            let near = tree.knn(q, BLEND);
+            let (mut sum, mut wsum) = (0.0, 0.0);
+            for &(k, d) in &near {
+                let v = values[k];
+                if !v.is_finite() {
+                    continue;
+                }
+                if d <= 0.0 {
+                    return v;
+                }
+                let w = 1.0 / (d * d);
+                sum += w * v;
+                wsum += w;
+            }
+            if wsum > 0.0 && (sum / wsum).is_finite() {
+                sum / wsum
+            } else {
+                near.first().map_or(f64::NAN, |&(k, _)| values[k])
+            }
+        })
         .collect())
 }
 
@@ -211,6 +240,24 @@ fn nearest_values(
 mod tests {
     use super::*;
     use crate::nurbs::Params;
+
+    /// The blend reproduces the values at the points, is the plain mean halfway between two
+    /// equal-distance points, ignores non-finite values, and is smooth rather than a step.
+    #[test]
+    fn deviation_blend_interpolates() {
+        let pts = [Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0)];
+        let v = interpolated_values(&pts, &pts, &[0.0, 1.0]).unwrap();
+        assert_eq!(v, vec![0.0, 1.0]);
+        let q: Vec<Point3<f64>> = (0..=10)
+            .map(|i| Point3::new(i as f64 / 10.0, 0.3, 0.0))
+            .collect();
+        let v = interpolated_values(&q, &pts, &[0.0, 1.0]).unwrap();
+        assert!((v[5] - 0.5).abs() < 1e-12, "{v:?}");
+        assert!(v.windows(2).all(|w| w[1] > w[0]), "{v:?}");
+        assert!(v[4] > 0.3 && v[6] < 0.7, "a blend, not a step: {v:?}");
+        let v = interpolated_values(&q, &pts, &[f64::NAN, 2.0]).unwrap();
+        assert!(v.iter().all(|&x| x == 2.0), "{v:?}");
+    }
 
     fn bump(x0: f64) -> BSplineSurface {
         let k = Params::uniform(3).unwrap().cubic_knots();
