@@ -116,26 +116,14 @@ pub fn project_along_within(
         if slope.is_nan() || slope.abs() <= 1e-12 {
             return None;
         }
-        let mut step = -fv / slope;
-        step = step.clamp(-max_dist, max_dist);
-        let mut accepted = false;
-        for _ in 0..12 {
-            let l = lambda + step;
-            if l.abs() <= max_dist {
-                let (fn_, gn) = f.value_and_gradient(&(r0 + d * l));
-                if fn_.is_finite() && fn_.abs() < fv.abs() {
-                    lambda = l;
-                    fv = fn_;
-                    g = gn;
-                    accepted = true;
-                    break;
-                }
-            }
-            step *= 0.5;
-        }
-        if !accepted {
-            return None;
-        }
+        let step = (-fv / slope).clamp(-max_dist, max_dist);
+        (fv, (lambda, g)) = backtrack(fv, 12, |s| {
+            let l = lambda + step * s;
+            (l.abs() <= max_dist).then(|| {
+                let (fl, gl) = f.value_and_gradient(&(r0 + d * l));
+                (fl, (l, gl))
+            })
+        })?;
     }
     (fv.abs() <= tol * 10.0).then(|| r0 + d * lambda)
 }
@@ -171,27 +159,38 @@ pub fn project_gradient_with_normal(
         if g2.is_nan() || g2 <= 1e-24 {
             return None;
         }
-        let mut step = -g * (fv / g2);
-        let mut accepted = false;
-        for _ in 0..12 {
-            let y = x + step;
-            if (y - x0).norm() <= max_dist {
+        let step = -g * (fv / g2);
+        (fv, (x, g)) = backtrack(fv, 12, |s| {
+            let y = x + step * s;
+            ((y - x0).norm() <= max_dist).then(|| {
                 let (fy, gy) = f.value_and_gradient(&y);
-                if fy.is_finite() && fy.abs() < fv.abs() {
-                    x = y;
-                    fv = fy;
-                    g = gy;
-                    accepted = true;
-                    break;
-                }
-            }
-            step *= 0.5;
-        }
-        if !accepted {
-            return None;
-        }
+                (fy, (y, gy))
+            })
+        })?;
     }
     (fv.abs() <= tol * 10.0).then_some((x, g))
+}
+
+/// The backtracking of the damped Newton iterations (here and in `polygonize::newton`): tries
+/// the fractions s = 1, 1/2, 1/4, ... of a full step, at most `tries` of them; `trial(s)` gives
+/// f at the candidate that fraction of the step away and the candidate itself, or `None` when
+/// the candidate leaves the allowed region. Returns the first candidate where f is finite and
+/// |f| < |`f_now`|, or `None` when no fraction decreases |f|.
+pub(crate) fn backtrack<C>(
+    f_now: f64,
+    tries: usize,
+    mut trial: impl FnMut(f64) -> Option<(f64, C)>,
+) -> Option<(f64, C)> {
+    let mut s = 1.0;
+    for _ in 0..tries {
+        if let Some((fv, c)) = trial(s) {
+            if fv.is_finite() && fv.abs() < f_now.abs() {
+                return Some((fv, c));
+            }
+        }
+        s *= 0.5;
+    }
+    None
 }
 
 /// Distance estimate |f| / |grad f| of `x` from the surface.
@@ -256,6 +255,20 @@ mod tests {
         let q = project_gradient_within(&Sphere, &Point3::new(0.0, 0.0, 1.3), 1.0, 1e-12).unwrap();
         assert!((q.z - 1.0).abs() < 1e-12);
         assert!((distance_estimate(&Sphere, &Point3::new(0.0, 2.0, 0.0)) - 1.0).abs() < 1e-12);
+    }
+
+    /// Halves until |f| decreases, skips disallowed candidates, gives up after `tries`.
+    #[test]
+    fn backtrack_halves_until_f_decreases() {
+        // f(x) = |x - 1| - 0.5 from x = 0 (f = 0.5), full step 4: fractions 1, 1/2 land at 4
+        // and 2 (f = 2.5, 0.5), 1/4 at 1 (f = -0.5, |f| not smaller), 1/8 at 0.5 (f = 0).
+        let f = |x: f64| (x - 1.0).abs() - 0.5;
+        let r = backtrack(0.5, 10, |s| Some((f(4.0 * s), 4.0 * s)));
+        assert_eq!(r, Some((0.0, 0.5)));
+        let r = backtrack(0.5, 10, |s| (4.0 * s < 0.6).then(|| (f(4.0 * s), 4.0 * s)));
+        assert_eq!(r, Some((0.0, 0.5)));
+        assert_eq!(backtrack(0.5, 3, |s| Some((f(4.0 * s), 4.0 * s))), None);
+        assert_eq!(backtrack(0.5, 10, |_| Some((f64::NAN, 0.0))), None);
     }
 
     #[test]

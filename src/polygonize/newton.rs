@@ -14,6 +14,7 @@
 //! Hand-written because the iteration is five lines; the implicit engineer's `implicit/project.rs`
 //! can replace [`project`] once merged.
 
+use crate::implicit::project::backtrack;
 use crate::implicit::Implicit;
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
@@ -70,22 +71,14 @@ pub fn project<I: Implicit + ?Sized>(
             step *= opt.max_step / len;
         }
         // Damped: halve while |f| does not decrease.
-        let mut accepted = false;
-        for _ in 0..20 {
-            let q = p + step;
+        let Some(next) = backtrack(v, 20, |s| {
+            let q = p + step * s;
             let (vq, gq) = f.value_and_gradient(&q);
-            if vq.is_finite() && vq.abs() < v.abs() {
-                p = q;
-                v = vq;
-                g = gq;
-                accepted = true;
-                break;
-            }
-            step *= 0.5;
-        }
-        if !accepted {
+            Some((vq, (q, gq)))
+        }) else {
             break;
-        }
+        };
+        (v, (p, g)) = next;
     }
     if v.is_finite() && finite_vec(&g) && v.abs() <= opt.accept.max(opt.tol) * g.norm() {
         return Ok((p, g));
@@ -122,25 +115,17 @@ pub fn solve_on_line<I: Implicit + ?Sized>(
         if d == 0.0 || !d.is_finite() {
             break;
         }
-        let mut step = (-v / d).clamp(-0.25 * s_max, 0.25 * s_max);
-        let mut accepted = false;
-        for _ in 0..20 {
-            let t = s + step;
-            if t.abs() <= s_max {
+        let step = (-v / d).clamp(-0.25 * s_max, 0.25 * s_max);
+        let Some(next) = backtrack(v, 20, |k| {
+            let t = s + step * k;
+            (t.abs() <= s_max).then(|| {
                 let (vt, gt) = at(t);
-                if vt.is_finite() && vt.abs() < v.abs() {
-                    s = t;
-                    v = vt;
-                    g = gt;
-                    accepted = true;
-                    break;
-                }
-            }
-            step *= 0.5;
-        }
-        if !accepted {
+                (vt, (t, gt))
+            })
+        }) else {
             break;
-        }
+        };
+        (v, (s, g)) = next;
     }
     // Stalled close enough (noise below tol): accept within 1000 tol.
     if v.is_finite() && v.abs() <= 1e3 * tol * g.norm() {
