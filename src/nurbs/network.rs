@@ -309,14 +309,24 @@ pub(crate) fn two_patch_network(height: fn(f64, f64) -> f64) -> PatchNetwork {
             .collect();
         BSplineSurface::new(3, 3, k.clone(), k.clone(), ctrl).unwrap()
     };
-    let (a, b) = (patch(0.0), patch(1.0));
+    side_by_side(patch(0.0), patch(1.0))
+}
+
+/// Test fixture: the network of two patches side by side, `a`'s side u = 1 being `b`'s side
+/// u = 0 (one shared edge), its six vertices the patches' corners.
+#[cfg(test)]
+pub(crate) fn side_by_side(a: BSplineSurface, b: BSplineSurface) -> PatchNetwork {
+    let corner = |s: &BSplineSurface, i: usize, j: usize| {
+        let (u, v) = (s.domain_u(), s.domain_v());
+        s.evaluate([u.0, u.1][i], [v.0, v.1][j])
+    };
     let v = vec![
-        a.evaluate(0.0, 0.0),
-        a.evaluate(1.0, 0.0),
-        a.evaluate(1.0, 1.0),
-        a.evaluate(0.0, 1.0),
-        b.evaluate(1.0, 0.0),
-        b.evaluate(1.0, 1.0),
+        corner(&a, 0, 0),
+        corner(&a, 1, 0),
+        corner(&a, 1, 1),
+        corner(&a, 0, 1),
+        corner(&b, 1, 0),
+        corner(&b, 1, 1),
     ];
     PatchNetwork::from_patches(
         v,

@@ -191,7 +191,7 @@ pub fn normal_jumps(net: &PatchNetwork, samples_per_edge: usize) -> ContinuityRe
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nurbs::{BSplineSurface, PatchInput};
+    use crate::nurbs::BSplineSurface;
     use nalgebra::Point3;
 
     /// A flat bicubic patch with corners a (u,v)=(0,0), b (1,0), c (1,1), d (0,1).
@@ -216,7 +216,7 @@ mod tests {
     #[test]
     fn bent_pair_measures_the_fold_angle() {
         let alpha = 10f64.to_radians();
-        let v = vec![
+        let v = [
             Point3::new(0.0, 0.0, 0.0),
             Point3::new(1.0, 0.0, 0.0),
             Point3::new(1.0, 1.0, 0.0),
@@ -226,22 +226,7 @@ mod tests {
         ];
         let a = flat(v[0], v[1], v[2], v[3]);
         let b = flat(v[1], v[4], v[5], v[2]);
-        let net = PatchNetwork::from_patches(
-            v,
-            vec![
-                PatchInput {
-                    surface: a,
-                    corners: [0, 1, 2, 3],
-                    same_sense: true,
-                },
-                PatchInput {
-                    surface: b,
-                    corners: [1, 4, 5, 2],
-                    same_sense: true,
-                },
-            ],
-        )
-        .unwrap();
+        let net = crate::nurbs::network::side_by_side(a, b);
         let r = normal_jumps(&net, 5);
         assert_eq!(r.shared_edges, 1);
         assert_eq!(r.all_deg.samples, 5);
