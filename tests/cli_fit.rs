@@ -222,18 +222,17 @@ fn extrapolated_area_is_reported_and_warned() {
     let input = bunny.parent().unwrap().join("teapot.obj");
     let dir = tempfile::tempdir().unwrap();
     let (step, report) = (dir.path().join("t.step"), dir.path().join("t.json"));
-    let o = bin()
-        .arg("fit")
-        .arg(&input)
-        .arg("-q")
-        .arg("-o")
-        .arg(&step)
-        .arg("--report")
-        .arg(&report)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
+    let path = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let (code, _, err) = common::run(&[
+        "fit",
+        &path(&input),
+        "-q",
+        "-o",
+        &path(&step),
+        "--report",
+        &path(&report),
+    ]);
+    assert_eq!(code, 0, "{err}");
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
     let frac = f(&r, &["support", "unsupported_fraction"]);
     assert!(frac > 0.05 && frac < 0.2, "{}", r["support"]);
@@ -284,18 +283,10 @@ fn local_hole_fills_before_the_fit() {
         .collect();
     std::fs::write(&cloud, xyz).unwrap();
     let out = dir.path().join("cloud.step");
-    let o = bin()
-        .arg("fit")
-        .arg(&cloud)
-        .args(["-q", "--fill-holes", "rbf", "-o"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        !o.status.success() && err.contains("needs a triangle mesh"),
-        "{err}"
-    );
+    let (cloud_arg, out_arg) = (cloud.to_str().unwrap(), out.to_str().unwrap());
+    let (code, _, err) =
+        common::run(&["fit", cloud_arg, "-q", "--fill-holes", "rbf", "-o", out_arg]);
+    assert!(code != 0 && err.contains("needs a triangle mesh"), "{err}");
     assert!(err.contains("cloud.xyz") && !out.exists(), "{err}");
     // The default leaves the closing to the implicit and reports no local fill.
     let r = fit(
