@@ -281,6 +281,16 @@ impl Grid {
         }
         self.key([r.x.floor() as i64, r.y.floor() as i64, r.z.floor() as i64])
     }
+    /// Keys of the 3 x 3 x 3 block of voxels centred on `i` (`i` included), in a fixed order;
+    /// voxels off the grid are skipped.
+    fn block27(self, i: Idx) -> impl Iterator<Item = u64> {
+        (0..27).filter_map(move |m| self.key(add(i, [m % 3 - 1, m / 3 % 3 - 1, m / 9 - 1])))
+    }
+    /// Keys of the 8 voxels sharing grid vertex `v` (voxel v + (dx - 1, dy - 1, dz - 1) for
+    /// c = dx + 2 dy + 4 dz); voxels off the grid are skipped.
+    fn around_vertex(self, v: Idx) -> impl Iterator<Item = u64> {
+        (0..8).filter_map(move |c| self.key(add(v, [(c & 1) - 1, (c >> 1 & 1) - 1, (c >> 2) - 1])))
+    }
     /// Packs a grid vertex (0..=n per axis).
     fn vkey(i: Idx) -> u64 {
         i[0] as u64 | (i[1] as u64) << BITS | (i[2] as u64) << (2 * BITS)
@@ -385,10 +395,7 @@ impl<I: Implicit + ?Sized> Builder<'_, I> {
     }
 
     fn neighbours26(&self, k: u64) -> impl Iterator<Item = u64> + '_ {
-        let i = Grid::unkey(k);
-        (0..27)
-            .filter(|&m| m != 13)
-            .filter_map(move |m| self.grid.key(add(i, [m % 3 - 1, m / 3 % 3 - 1, m / 9 - 1])))
+        self.grid.block27(Grid::unkey(k)).filter(move |&n| n != k)
     }
 
     /// Flood from the seeds; returns the sorted seed voxels.
@@ -444,12 +451,9 @@ impl<I: Implicit + ?Sized> Builder<'_, I> {
             .node_vertex
             .par_iter()
             .map(|&v| {
-                (0..8).any(|c| {
-                    let i = add(v, [(c & 1) - 1, (c >> 1 & 1) - 1, (c >> 2) - 1]);
-                    self.grid
-                        .key(i)
-                        .is_some_and(|k| seed_voxels.binary_search(&k).is_ok())
-                })
+                self.grid
+                    .around_vertex(v)
+                    .any(|k| seed_voxels.binary_search(&k).is_ok())
             })
             .collect();
         let mut node_comp = vec![0u32; net.nodes.len()];
@@ -494,12 +498,7 @@ impl<I: Implicit + ?Sized> Builder<'_, I> {
             .iter()
             .enumerate()
             .filter(|(_, &c)| !supported[c as usize] && share[c as usize] < 0.5 * best)
-            .flat_map(|(n, _)| {
-                let v = node_vertex[n];
-                (0..8).filter_map(move |c| {
-                    grid.key(add(v, [(c & 1) - 1, (c >> 1 & 1) - 1, (c >> 2) - 1]))
-                })
-            })
+            .flat_map(|(n, _)| grid.around_vertex(node_vertex[n]))
             .filter(|k| vox.get(k).is_some_and(|v| v.inside))
             .collect();
         dropped.sort_unstable();
@@ -671,11 +670,9 @@ impl<I: Implicit + ?Sized> Builder<'_, I> {
         // Not next to a component the support test dropped (a sheet of the implicit away from
         // the data, which a medial voxel would otherwise join to the surface).
         found.retain(|x| {
-            let i = Grid::unkey(x.0);
-            !(0..27).any(|m| {
-                grid.key(add(i, [m % 3 - 1, m / 3 % 3 - 1, m / 9 - 1]))
-                    .is_some_and(|k| dropped.binary_search(&k).is_ok())
-            })
+            !grid
+                .block27(Grid::unkey(x.0))
+                .any(|k| dropped.binary_search(&k).is_ok())
         });
         self.eval_many(found.iter().map(|x| x.0).collect())?;
         for &(k, m, fm) in &found {
@@ -702,11 +699,9 @@ impl<I: Implicit + ?Sized> Builder<'_, I> {
 
     /// A seed lies in the voxel or one of its 26 neighbours.
     fn near_seeds(&self, i: Idx) -> bool {
-        (0..27).any(|m| {
-            self.grid
-                .key(add(i, [m % 3 - 1, m / 3 % 3 - 1, m / 9 - 1]))
-                .is_some_and(|k| self.seed_voxels.binary_search(&k).is_ok())
-        })
+        self.grid
+            .block27(i)
+            .any(|k| self.seed_voxels.binary_search(&k).is_ok())
     }
 
     /// Two inside voxels touching along an edge or at a vertex are joined without the path test
