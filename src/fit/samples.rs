@@ -47,7 +47,9 @@
 //! tangent (exact for that curve, in the implicit's tangent plane); at the corners it is the
 //! along-side derivative of the adjacent side. d/dv on the rows v = 0 and v = 1 is the one-sided
 //! difference (third order when T >= 3) of each column of samples, projected onto the implicit's tangent
-//! plane at the boundary sample (normal from the edge data). The two patches of an edge have
+//! plane at the boundary sample (normal from the edge data) and, where it reaches back across
+//! the side (a patch wrapping a thin rim), reflected into the patch ([`point_into_patch`]).
+//! The two patches of an edge have
 //! different cross derivatives (each points into its own patch, with its own length), but both
 //! lie in the same tangent plane with the along-edge derivative, so the network is
 //! tangent-continuous (G1) at every boundary sample. Between samples the normal jump depends on
@@ -455,6 +457,49 @@ fn side(e: &EdgeSamples, reversed: bool) -> Side {
     }
 }
 
+/// Which parameter a side runs along: `V` sides (v = 0, v = 1) run along u, `U` sides along v.
+#[derive(Clone, Copy)]
+enum SideKind {
+    U,
+    V,
+}
+
+/// The unit vector of the tangent plane (normal `n`) perpendicular to a side whose derivative
+/// along itself is `along`, pointing the way the patch parameter across the side increases:
+/// N x C' on a v side, C' x N on a u side, so that S_u x S_v points along N.
+fn across(kind: SideKind, along: &Vector3<f64>, n: &Vector3<f64>) -> Option<Vector3<f64>> {
+    match kind {
+        SideKind::V => n.cross(along),
+        SideKind::U => along.cross(n),
+    }
+    .try_normalize(1e-300)
+}
+
+/// Reflects the interior cross derivatives of one side that point backwards across it,
+/// D -> D - 2 (D . e) e with e from [`across`]. A one-sided difference of the sample columns
+/// reaches back across the side where the patch wraps the rim of a part thinner than the
+/// sample spacing (the bunny's ear tip); left as it is, the patch's normal there is flipped
+/// and the two neighbours' normals differ by 180 degrees at that sample. Reflection keeps the
+/// derivative's length and its component along the side. Default bunny: the largest normal
+/// jump (our measure) 180 -> 92 degrees, edge samples over 5 degrees 40 -> 36; the cow 314 ->
+/// 236, the Utah teapot 571 -> 432.
+fn point_into_patch(
+    d: &mut [Vector3<f64>],
+    along: &[Vector3<f64>],
+    normals: &[Vector3<f64>],
+    kind: SideKind,
+) {
+    let n = d.len().min(along.len()).min(normals.len());
+    for k in 1..n.saturating_sub(1) {
+        if let Some(e) = across(kind, &along[k], &normals[k]) {
+            let b = d[k].dot(&e);
+            if b < 0.0 {
+                d[k] -= e * (2.0 * b);
+            }
+        }
+    }
+}
+
 fn tangent_part(x: Vector3<f64>, n: &Vector3<f64>) -> Vector3<f64> {
     x - n * n.dot(&x)
 }
@@ -721,6 +766,12 @@ fn build_patch<I: Implicit + ?Sized>(
         tan_v0.push(v0);
         tan_v1.push(v1);
     }
+    // A cross derivative reaching back across its side (a one-sided difference over the rim
+    // of a part thinner than the sample spacing) is reflected into the patch.
+    point_into_patch(&mut tan_v0, &bot.d, &bot.n, SideKind::V);
+    point_into_patch(&mut tan_v1, &top.d, &top.n, SideKind::V);
+    point_into_patch(&mut tan_u0, &left.d, &left.n, SideKind::U);
+    point_into_patch(&mut tan_u1, &right.d, &right.n, SideKind::U);
     // Tolerance estimate along rows (u), columns (v) and at cell centres.
     let dist = |p: &Vector3<f64>| {
         let (val, g) = f.value_and_gradient(&Point3::from(*p));
@@ -1062,6 +1113,31 @@ mod tests {
             &sample_patches(&net, &blob, &opt).unwrap(),
             b.diagonal(),
         );
+    }
+
+    #[test]
+    fn cross_derivatives_reaching_back_are_reflected_into_the_patch() {
+        // A v = 0 side along +x on the plane z = 0 (normal +z): the patch lies at +y.
+        let along = vec![Vector3::x(); 4];
+        let normals = vec![Vector3::z(); 4];
+        let mut d = vec![
+            Vector3::new(0.3, 0.2, 0.0),  // corner: never touched
+            Vector3::new(0.5, 1.0, 0.0),  // into the patch: kept
+            Vector3::new(0.4, -2.0, 0.0), // back across the side: reflected
+            Vector3::new(0.1, -0.7, 0.0), // corner: never touched
+        ];
+        let before = d.clone();
+        point_into_patch(&mut d, &along, &normals, SideKind::V);
+        assert_eq!(d[0], before[0]);
+        assert_eq!(d[1], before[1]);
+        assert_eq!(d[2], Vector3::new(0.4, 2.0, 0.0));
+        assert_eq!(d[3], before[3]);
+        // The same side seen as a u side (running along +x, the patch lies at -y, since
+        // S_u x S_v must point along +z): the sign convention flips.
+        let mut d = before.clone();
+        point_into_patch(&mut d, &along, &normals, SideKind::U);
+        assert_eq!(d[1], Vector3::new(0.5, -1.0, 0.0));
+        assert_eq!(d[2], before[2]);
     }
 
     #[test]
