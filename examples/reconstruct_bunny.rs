@@ -3,35 +3,9 @@
 //!
 //! cargo run --release --example reconstruct_bunny [-- PATH.obj [--cloud]]
 
-use nalgebra::Point3;
 use scansurf::reconstruct::{reconstruct, ReconstructOptions};
 use scansurf::Mesh;
 use std::time::Instant;
-
-/// Minimal `v x y z` / `f a b c` reader (the crate's OBJ reader lives in src/io).
-fn read_obj(path: &str) -> Mesh {
-    let text = std::fs::read_to_string(path).expect("read OBJ");
-    let mut m = Mesh::default();
-    for line in text.lines() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let c: Vec<f64> = it.take(3).map(|s| s.parse().unwrap()).collect();
-                m.positions.push(Point3::new(c[0], c[1], c[2]));
-            }
-            Some("f") => {
-                let v: Vec<u32> = it
-                    .map(|s| s.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                    .collect();
-                for k in 1..v.len() - 1 {
-                    m.faces.push([v[0], v[k], v[k + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    m
-}
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -40,9 +14,15 @@ fn main() {
         .skip(1)
         .find(|a| !a.starts_with("--"))
         .cloned()
-        .unwrap_or_else(|| "/work/shared/data/stanford-bunny.obj".into());
+        .unwrap_or_else(|| "../shared/data/stanford-bunny.obj".into());
     let cloud = args.iter().any(|a| a == "--cloud");
-    let mut mesh = read_obj(&path);
+    let mut mesh = match scansurf::io::read_mesh(std::path::Path::new(&path)) {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("{path}: {e}");
+            std::process::exit(1);
+        }
+    };
     if cloud {
         let (p, _) = mesh.referenced_points();
         mesh = Mesh::from_points(p, None);
