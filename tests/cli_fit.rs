@@ -65,8 +65,14 @@ fn bunny_step_is_valid_closed_and_accurate() {
         "{dev}"
     );
     // Spike guard: at the crease of the base two interior section rows once ran onto the
-    // bottom sheet (max 1.7e-3); with those rows rejected the max is 1.16e-3.
-    assert!(f(dev, &["max"]) <= 1.4e-3, "{dev}");
+    // bottom sheet (max 1.7e-3); with those rows rejected the max was 1.16e-3 at 16
+    // intervals per side, 1.55e-3 at the 12 that patches this small get (the crease itself,
+    // less finely sampled).
+    assert!(f(dev, &["max"]) <= 1.6e-3, "{dev}");
+    assert_eq!(f(&r, &["sampling", "max_intervals"]), 12.0);
+    // Patches under 0.06 mm (the bunny read as millimetres): every STEP face lies on a surface
+    // extended by an apron, so that OpenCASCADE's point projection finds its edge points.
+    assert_eq!(f(&r, &["step", "extended_faces"]), patches, "{}", r["step"]);
     // The STEP rendered back (issue 9): shaded, filling the frame, patch boundaries as dark
     // lines, hardly any orange back faces (folds). Measured on a 1,472-patch bunny STEP:
     // foreground 0.29, 229 grey levels, dark 0.30, coloured 0.0013.
@@ -105,6 +111,17 @@ fn bunny_step_is_valid_closed_and_accurate() {
         f(&c, &["normal_jump_deg", "p95"]) <= 1.0,
         "{}",
         c["normal_jump_deg"]
+    );
+    // OpenCASCADE's projection-based measure agrees with ours (exact edge parameters): on the
+    // bare 0.0076 mm patches its projection missed 1 % of the edge points and its mean read
+    // 1.08 deg against our 0.16.
+    let (occ, ours) = (
+        f(&c, &["normal_jump_deg", "mean"]),
+        f(&r, &["continuity", "all_deg", "mean"]),
+    );
+    assert!(
+        (occ - ours).abs() <= 0.25 * ours,
+        "cad_check mean {occ} vs ours {ours}"
     );
     let d = &c["deviation"];
     assert!(f(d, &["mean_rel"]) <= 2e-4, "{d}");
@@ -307,6 +324,11 @@ fn bad_options_leave_nothing() {
         ("x.step", vec!["--patches", "0"], "at least 1"),
         ("x.step", vec!["--tolerance=-1"], "tolerance"),
         ("x.step", vec!["--unit", "furlong"], "furlong"),
+        (
+            "x.step",
+            vec!["--extend-surfaces", "sometimes"],
+            "expected auto or never",
+        ),
         ("x.step", vec!["--iges", "y.dxf"], "must end in"),
         (
             "x.step",

@@ -2,7 +2,7 @@
 //! [--tolerance T] [--smooth N] [--deviation-ply D.ply] [--preview P.png]`.
 
 use crate::error::{Error, Result};
-use crate::export::{ExportOptions, LengthUnit, Timestamp};
+use crate::export::{ExportOptions, ExtendSurfaces, LengthUnit, Timestamp};
 use crate::fit::net::PatchSize;
 use crate::fit::pipeline::{fit_measured, FitOptions};
 use crate::holes::{fill_holes, FillMethod, FillOptions};
@@ -60,6 +60,12 @@ pub struct Args {
     /// Unit of the input coordinates, declared in STEP/IGES: mm, cm, m or um.
     #[arg(long, default_value = "mm")]
     pub unit: String,
+    /// STEP faces on surfaces extended beyond them: `auto` extends the surfaces of patches
+    /// too small (under about 0.03 mm in the declared unit) for OpenCASCADE's point projection
+    /// to work on them, so the face is a trimmed region of a larger surface; `never` writes
+    /// every face as its whole surface.
+    #[arg(long, default_value = "auto", value_name = "auto|never")]
+    pub extend_surfaces: String,
     /// Header time stamp (ISO 8601, e.g. 2026-11-22T10:00:00). Default: SOURCE_DATE_EPOCH if
     /// set, else 1970-01-01T00:00:00, so the same input gives byte-identical files.
     #[arg(long)]
@@ -122,6 +128,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         })?),
     };
     let unit: LengthUnit = a.unit.parse()?;
+    let extend_surfaces: ExtendSurfaces = a.extend_surfaces.parse()?;
     let stamp = timestamp(&a)?;
     let size = match (a.patches, a.patch_size) {
         (Some(0), _) => return Err(Error::InvalidOption("--patches must be at least 1".into())),
@@ -174,6 +181,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     let mut opts = FitOptions {
         size,
         tolerance: a.tolerance,
+        apron_unit: (extend_surfaces == ExtendSurfaces::Auto).then_some(unit),
         ..FitOptions::default()
     };
     opts.implicit.tolerance = a.fit_tolerance;
@@ -198,8 +206,10 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         timestamp: stamp,
         unit,
         tolerance: (report.tolerance).max(report.bbox_diagonal * 1e-7),
+        extend_surfaces,
         ..ExportOptions::default()
     };
+    report.step = Some(crate::export::apron::summary(&network, &export(&a.output)));
     // Both texts are made before either file is written, so an export error leaves no file.
     let step = crate::export::step_string(&network, &export(&a.output))?;
     let iges = match &a.iges {

@@ -25,7 +25,7 @@ pub struct Args {
     /// value of its 8 nearest scan points; scale 0 to the 99th percentile), with a legend.
     #[arg(long, value_name = "D.ply", conflicts_with = "against")]
     pub deviation: Option<PathBuf>,
-    /// iso, front, top or side.
+    /// iso, front, top, side, bottom or back.
     #[arg(long, default_value = "iso")]
     pub view: String,
     /// Model axis pointing up in the picture: y (scans, default) or z (CAD).

@@ -7,6 +7,7 @@
 //! output is deterministic: the same network and options give the same bytes. Reals are written
 //! with the shortest representation that reads back to the same `f64` ([`fmt_real`]).
 
+pub mod apron;
 pub mod iges;
 pub mod step;
 
@@ -185,6 +186,33 @@ pub struct ExportOptions {
     /// Length tolerance in `unit`: STEP UNCERTAINTY_MEASURE_WITH_UNIT and IGES minimum
     /// resolution. Must be finite and positive.
     pub tolerance: f64,
+    /// Whether STEP faces may be written as trimmed regions of extended surfaces
+    /// ([`apron`]).
+    pub extend_surfaces: ExtendSurfaces,
+}
+
+/// When the STEP writer extends a face's surface beyond the face ([`apron`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ExtendSurfaces {
+    /// Where a patch is small enough, in millimetres, for OpenCASCADE's point projection to
+    /// fail on it ([`apron::apron_widths`]); other faces are untrimmed.
+    #[default]
+    Auto,
+    /// Never: every face is its whole (untrimmed) surface.
+    Never,
+}
+
+impl std::str::FromStr for ExtendSurfaces {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<ExtendSurfaces> {
+        match s.to_ascii_lowercase().as_str() {
+            "auto" => Ok(ExtendSurfaces::Auto),
+            "never" | "no" | "none" => Ok(ExtendSurfaces::Never),
+            other => Err(Error::InvalidOption(format!(
+                "unknown surface extension '{other}': expected auto or never"
+            ))),
+        }
+    }
 }
 
 impl Default for ExportOptions {
@@ -197,6 +225,7 @@ impl Default for ExportOptions {
             authorization: String::new(),
             unit: LengthUnit::Millimetre,
             tolerance: 1e-6,
+            extend_surfaces: ExtendSurfaces::Auto,
         }
     }
 }
@@ -210,6 +239,14 @@ impl ExportOptions {
             )));
         }
         Ok(())
+    }
+
+    /// The apron widths (e_u, e_v) the STEP writer gives a face on `s`.
+    pub fn apron_widths(&self, s: &crate::nurbs::BSplineSurface) -> (f64, f64) {
+        match self.extend_surfaces {
+            ExtendSurfaces::Auto => apron::apron_widths(s, self.unit),
+            ExtendSurfaces::Never => (0.0, 0.0),
+        }
     }
 
     pub(crate) fn time(&self) -> Timestamp {

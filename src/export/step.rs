@@ -20,6 +20,11 @@
 //! runs counter-clockwise around `S_u × S_v` ([`Side::LOOP`](crate::nurbs::Side::LOOP)); when
 //! that normal points inward (`same_sense == false`) the face and its bound are marked `.F.`.
 //! No pcurves are written (they are optional; readers compute them).
+//!
+//! Small patches (under about 0.03 mm, [`super::apron`]) are written on their surface
+//! extended by a linear apron ([`crate::nurbs::extend`]): the face, bounded by the same shared
+//! edge curves, is then a trimmed region of a larger B_SPLINE_SURFACE_WITH_KNOTS, which
+//! OpenCASCADE's point projection handles where it fails on the bare patch.
 
 use super::{fmt_real, software, ExportOptions};
 use crate::nurbs::basis::multiplicities;
@@ -128,7 +133,12 @@ pub fn step_string(net: &PatchNetwork, opts: &ExportOptions) -> Result<String> {
                 "FACE_OUTER_BOUND('',#{lp},{})",
                 logical(f.same_sense)
             ));
-            let surf = write_surface(&mut w, &f.surface);
+            let (eu, ev) = opts.apron_widths(&f.surface);
+            let surf = if eu > 0.0 || ev > 0.0 {
+                write_surface(&mut w, &f.surface.extended(eu, ev))
+            } else {
+                write_surface(&mut w, &f.surface)
+            };
             w.add(format!(
                 "ADVANCED_FACE('',(#{bound}),#{surf},{})",
                 logical(f.same_sense)

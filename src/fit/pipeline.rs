@@ -35,7 +35,18 @@ pub struct FitOptions {
     pub normal_neighbours: usize,
     /// Samples per shared edge for the normal-jump measurement (default 5, as cad_check).
     pub jump_samples: usize,
+    /// The unit the STEP file will declare when its writer may extend small patches' surfaces
+    /// ([`crate::export::apron`]); `None` when it will not. Patches that small get at most
+    /// [`APRON_MAX_INTERVALS`] sample intervals per side instead of 16, so that with the two
+    /// apron spans OpenCASCADE still samples them on its uniform grid.
+    pub apron_unit: Option<crate::export::LengthUnit>,
 }
+
+/// Most sample intervals per patch side when the STEP writer extends the patches' surfaces:
+/// 12 + 2 apron spans = 14 knot spans, the most for which OpenCASCADE's point projection
+/// samples a cubic B-spline on its uniform 44-line grid (more spans give 3 lines per span,
+/// too close together on a patch that small).
+pub const APRON_MAX_INTERVALS: usize = 12;
 
 impl Default for FitOptions {
     fn default() -> Self {
@@ -45,6 +56,7 @@ impl Default for FitOptions {
             implicit: ImplicitOptions::default(),
             normal_neighbours: 12,
             jump_samples: 5,
+            apron_unit: Some(crate::export::LengthUnit::Millimetre),
         }
     }
 }
@@ -92,6 +104,11 @@ pub struct FitReport {
     /// The local hole filling run before the fit (`--fill-holes rbf|planar|flat`), if any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hole_fill: Option<crate::holes::FillReport>,
+    /// How the STEP file represents the patches (set by the writer's caller): faces on
+    /// surfaces extended by an apron for OpenCASCADE's point projection
+    /// ([`crate::export::apron`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub step: Option<crate::export::apron::ApronSummary>,
     pub timings: FitTimings,
 }
 
@@ -144,7 +161,14 @@ pub fn fit_measured(
     progress("sampling", 0.5);
     let t = Instant::now();
     let tol = opts.tolerance * diag;
-    let sampling = sample_patches(&net, &f, &SampleOptions::new(tol, diag))?;
+    let mut sample_opts = SampleOptions::new(tol, diag);
+    if opts
+        .apron_unit
+        .is_some_and(|u| crate::export::apron::patch_needs_apron(net_report.h, u))
+    {
+        sample_opts.max_intervals = APRON_MAX_INTERVALS;
+    }
+    let sampling = sample_patches(&net, &f, &sample_opts)?;
     timings.sampling = t.elapsed().as_secs_f64();
     let data = KdTree::build(&op.points)?;
     let grids: Vec<&Vec<Vec<nalgebra::Point3<f64>>>> =
@@ -226,6 +250,7 @@ pub fn fit_measured(
         continuity,
         support,
         hole_fill: None,
+        step: None,
         timings,
     };
     Ok((network, report))

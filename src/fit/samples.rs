@@ -45,15 +45,15 @@
 //!
 //! **Cross-boundary derivatives.** d/du at the ends of interior rows is the row curve's own
 //! tangent (exact for that curve, in the implicit's tangent plane); at the corners it is the
-//! along-side derivative of the adjacent side. d/dv on the rows v = 0 and v = 1 is the one-sided
-//! difference (third order when T >= 3) of each column of samples, projected onto the implicit's tangent
-//! plane at the boundary sample (normal from the edge data) and, where it reaches back across
-//! the side (a patch wrapping a thin rim), reflected into the patch ([`point_into_patch`]).
-//! The two patches of an edge have
-//! different cross derivatives (each points into its own patch, with its own length), but both
-//! lie in the same tangent plane with the along-edge derivative, so the network is
-//! tangent-continuous (G1) at every boundary sample. Between samples the normal jump depends on
-//! the interpolation and is measured downstream (cad_check normal_jump_deg); at net vertices of
+//! along-side derivative of the adjacent side. d/dv on the rows v = 0 and v = 1 is the
+//! one-sided difference (third order when T >= 3) of each column of samples, projected onto
+//! the implicit's tangent plane at the boundary sample (normal from the edge data). On all four
+//! sides, an interior one that reaches back across its side (a patch wrapping a thin rim) is
+//! reflected into the patch ([`point_into_patch`]). The two patches of an edge have different
+//! cross derivatives (each points into its own patch, with its own length), but both lie in
+//! the same tangent plane with the along-edge derivative, so the network is tangent-continuous
+//! (G1) at every boundary sample. Between samples the normal jump depends on the
+//! interpolation and is measured downstream (cad_check normal_jump_deg); at net vertices of
 //! valence != 4 one bicubic per quad cannot be G1 in general (Peters & Fan), so no twist
 //! compatibility is attempted here.
 
@@ -76,7 +76,9 @@ pub struct SampleOptions {
     /// Model size (bounding-box diagonal): root-finding tolerances are 1e-12 of it.
     pub scale: f64,
     /// Fewest and most intervals per side (defaults 2 and 16; the cap bounds the cost where
-    /// the tolerance cannot be met, e.g. an implicit wobbling at its own fit tolerance).
+    /// the tolerance cannot be met, e.g. an implicit wobbling at its own fit tolerance; the
+    /// fit lowers it to 12 for patches small enough to get STEP aprons,
+    /// [`crate::fit::pipeline::APRON_MAX_INTERVALS`]).
     pub min_intervals: usize,
     pub max_intervals: usize,
     /// Refinement rounds.
@@ -194,6 +196,8 @@ pub struct SampleReport {
     /// Patches whose deviation fell by less than r^2 once their sample count rose by r >= 2:
     /// they stopped driving refinement (patches wrapping a part thinner than themselves, implicit defects).
     pub stalled: usize,
+    /// The cap on intervals per side ([`SampleOptions::max_intervals`]).
+    pub max_intervals: usize,
 }
 
 /// All patches with the shared edge data they were built from.
@@ -420,6 +424,7 @@ fn finish(
             .filter(|p| p.max_residual > 1e-9 * opt.scale)
             .count(),
         stalled,
+        max_intervals: opt.max_intervals,
     };
     Ok(PatchSampling {
         patches,

@@ -12,16 +12,19 @@
 //! 2. [`read_step`] / [`StepFile::faces`]: every ADVANCED_FACE resolved to a
 //!    [`BSplineSurface`] (B_SPLINE_SURFACE_WITH_KNOTS, or the complex-entity form
 //!    `( BOUNDED_SURFACE() B_SPLINE_SURFACE(...) B_SPLINE_SURFACE_WITH_KNOTS(...) ... )`,
-//!    rational only with unit weights) and its sense. A face must be bounded by its whole
-//!    parameter rectangle (one loop whose edge ends lie at the surface corners and whose edge
-//!    curves run along the domain boundary); anything else (trimmed faces, holes, analytic
-//!    surfaces such as PLANE or CYLINDRICAL_SURFACE, rational weights) is an
-//!    [`Error::Unsupported`] that names the entity and the line.
+//!    rational only with unit weights) and its sense. A face must be bounded by a parameter
+//!    rectangle of its surface (one loop whose edge ends lie at the corners of a rectangle
+//!    [u_a, u_b] x [v_a, v_b] and whose edge curves run along its sides: the whole domain, or
+//!    a sub-rectangle as scansurf writes for small patches, whose surface is then restricted
+//!    to it); anything else (trimmed faces with other bounds, holes, analytic surfaces such
+//!    as PLANE or CYLINDRICAL_SURFACE, rational weights) is an [`Error::Unsupported`] that
+//!    names the entity and the line.
 //!
 //! Hand-written: no crate of the Rust ecosystem parses Part 21 and resolves B-rep faces into
 //! our surface type without pulling in a whole CAD kernel; the subset needed is small.
 
 use crate::error::{Error, Location, Result};
+use crate::nurbs::basis::multiplicities;
 use crate::nurbs::BSplineSurface;
 use nalgebra::Point3;
 use std::collections::HashMap;
@@ -638,7 +641,10 @@ impl StepFile {
                 ),
             ));
         }
-        self.check_untrimmed(id, inst, &bounds[0], &surface, path)?;
+        let (u, v) = self.face_rectangle(id, inst, &bounds[0], &surface, path)?;
+        let surface = surface.restricted(u, v).map_err(|e| {
+            Error::unsupported(path, format!("face #{id} (line {}): {e}", inst.line))
+        })?;
         Ok(StepFace {
             id,
             surface,
@@ -759,23 +765,28 @@ impl StepFile {
         }
     }
 
-    /// Fails unless the bound is one loop whose edges run along the surface's parameter
-    /// rectangle: every edge end at a surface corner, every B-spline edge curve's midpoint on
-    /// the domain boundary (by point inversion), within 1e-3 of the patch size.
-    fn check_untrimmed(
+    /// The parameter rectangle the bound encloses: the bound must be one loop of edges that
+    /// run along iso-curves u = const or v = const of the surface, with every edge end at a
+    /// corner of one rectangle [u_a, u_b] x [v_a, v_b] of the domain (the whole domain for an
+    /// untrimmed face; a sub-rectangle for a face on an extended surface,
+    /// [`crate::nurbs::extend`]). Vertices are inverted on the surface (global search) and must
+    /// lie on it, and every B-spline edge curve's midpoint on the rectangle's boundary, within
+    /// 1e-3 of the patch size; corner parameters within 1e-9 of the domain width of a knot are
+    /// snapped to it.
+    fn face_rectangle(
         &self,
         face_id: usize,
         face: &Instance,
         bound: &Value,
         s: &BSplineSurface,
         path: &Path,
-    ) -> Result<()> {
+    ) -> Result<((f64, f64), (f64, f64))> {
         let trimmed = |why: String| {
             Error::unsupported(
                 path,
                 format!(
-                    "face #{face_id} (line {}) is trimmed ({why}): only faces bounded by their \
-                     whole parameter rectangle are supported",
+                    "face #{face_id} (line {}) is trimmed ({why}): only faces bounded by \
+                     iso-curves of their surface (a parameter rectangle) are supported",
                     face.line
                 ),
             )
@@ -806,18 +817,9 @@ impl StepFile {
             }
             _ => return Err(bad(lp, "an EDGE_LOOP")),
         };
-        let (u0, u1) = s.domain_u();
-        let (v0, v1) = s.domain_v();
-        let corners_uv = [(u0, v0), (u1, v0), (u1, v1), (u0, v1)];
-        let corners: Vec<Point3<f64>> = corners_uv.iter().map(|&(u, v)| s.evaluate(u, v)).collect();
-        let tol = 1e-3 * s.ctrl_extent().max(f64::MIN_POSITIVE);
-        let corner_of = |p: &Point3<f64>| {
-            (0..4)
-                .map(|k| ((corners[k] - p).norm(), k))
-                .min_by(|a, b| a.0.total_cmp(&b.0))
-                .filter(|(d, _)| *d <= tol)
-                .map(|(_, k)| k)
-        };
+        // Every edge: its two end vertices (id, point) and its curve's midpoint.
+        let mut ends: Vec<[(usize, Point3<f64>); 2]> = Vec::with_capacity(edges.len());
+        let mut mids: Vec<(usize, Option<Point3<f64>>)> = Vec::with_capacity(edges.len());
         for e in edges {
             let Value::Ref(oe) = e else {
                 return Err(bad(lp, "references to ORIENTED_EDGEs"));
@@ -831,39 +833,118 @@ impl StepFile {
                 Some([_, Value::Ref(a), Value::Ref(b), Value::Ref(g), _]) => (*a, *b, *g),
                 _ => return Err(bad(ec, "EDGE_CURVE(name, #v1, #v2, #curve, sense)")),
             };
-            let mut ends = [0usize; 2];
+            let mut pair = [(0usize, Point3::origin()); 2];
             for (k, v) in [va, vb].into_iter().enumerate() {
                 let vi = self.get(v, path, ec)?;
                 let p = match vi.record("VERTEX_POINT").map(|r| r.args.as_slice()) {
                     Some([_, Value::Ref(p)]) => self.point(*p, path, vi)?,
                     _ => return Err(bad(vi, "VERTEX_POINT(name, #point)")),
                 };
-                ends[k] = corner_of(&p).ok_or_else(|| {
-                    trimmed(format!("vertex #{v} is not at a corner of the surface"))
-                })?;
+                pair[k] = (v, p);
             }
-            // The edge curve's midpoint must lie on the side between its corners.
-            if let Some(mid) = self.curve_midpoint(geom) {
-                let (a, b) = (corners_uv[ends[0]], corners_uv[ends[1]]);
-                let guess = (0.5 * (a.0 + b.0), 0.5 * (a.1 + b.1));
-                let cp = s.closest_point(&mid, guess);
-                let on_side = [
-                    (cp.u - u0) / (u1 - u0),
-                    (u1 - cp.u) / (u1 - u0),
-                    (cp.v - v0) / (v1 - v0),
-                    (v1 - cp.v) / (v1 - v0),
-                ]
+            ends.push(pair);
+            mids.push((ec_id(oe), self.curve_midpoint(geom)));
+        }
+        let (u0, u1) = s.domain_u();
+        let (v0, v1) = s.domain_v();
+        let tol = 1e-3 * s.ctrl_extent().max(f64::MIN_POSITIVE);
+        // Vertex parameters: the nearest crossing of two knot lines of full multiplicity
+        // (the domain corners, and the trim lines of extended surfaces) where the surface
+        // point is the vertex, else a global inversion (whose parameters are snapped to the
+        // nearest knots when the surface point there is still the vertex).
+        let (wu, wv) = (u1 - u0, v1 - v0);
+        let full = |knots: &[f64], p: usize| -> Vec<f64> {
+            multiplicities(knots)
+                .into_iter()
+                .filter(|&(_, m)| m >= p)
+                .map(|(k, _)| k)
+                .collect()
+        };
+        let (lines_u, lines_v) = (full(&s.knots_u, s.degree_u), full(&s.knots_v, s.degree_v));
+        let snap = |x: f64, knots: &[f64], width: f64| {
+            knots
                 .iter()
-                .any(|d| d.abs() < 1e-3);
-                if cp.distance > tol || !on_side {
-                    return Err(trimmed(format!(
-                        "edge #{} runs inside the parameter rectangle",
-                        ec_id(oe)
-                    )));
-                }
+                .copied()
+                .min_by(|a, b| (a - x).abs().total_cmp(&(b - x).abs()))
+                .filter(|k| (k - x).abs() <= 1e-3 * width)
+                .unwrap_or(x)
+        };
+        let locate = |p: &Point3<f64>| -> Option<(f64, f64)> {
+            let crossing = lines_u
+                .iter()
+                .flat_map(|&u| lines_v.iter().map(move |&v| (u, v)))
+                .map(|(u, v)| ((s.evaluate(u, v) - p).norm(), (u, v)))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .filter(|(d, _)| *d <= tol);
+            if let Some((_, uv)) = crossing {
+                return Some(uv);
+            }
+            let c = s.closest_point_global(p, 4);
+            if c.distance > tol {
+                return None;
+            }
+            let snapped = (snap(c.u, &s.knots_u, wu), snap(c.v, &s.knots_v, wv));
+            if (s.evaluate(snapped.0, snapped.1) - p).norm() <= tol {
+                Some(snapped)
+            } else {
+                Some((c.u, c.v))
+            }
+        };
+        let mut uvs: Vec<(usize, (f64, f64))> = Vec::new();
+        for &(id, p) in ends.iter().flatten() {
+            if uvs.iter().any(|(v, _)| *v == id) {
+                continue;
+            }
+            let uv =
+                locate(&p).ok_or_else(|| trimmed(format!("vertex #{id} is not on the surface")))?;
+            uvs.push((id, uv));
+        }
+        let lo_u = uvs.iter().map(|(_, uv)| uv.0).fold(f64::INFINITY, f64::min);
+        let hi_u = uvs
+            .iter()
+            .map(|(_, uv)| uv.0)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let lo_v = uvs.iter().map(|(_, uv)| uv.1).fold(f64::INFINITY, f64::min);
+        let hi_v = uvs
+            .iter()
+            .map(|(_, uv)| uv.1)
+            .fold(f64::NEG_INFINITY, f64::max);
+        if !(hi_u - lo_u > 1e-9 * wu && hi_v - lo_v > 1e-9 * wv) {
+            return Err(trimmed(
+                "its vertices do not span a parameter rectangle".into(),
+            ));
+        }
+        // Each vertex at a corner of the rectangle (within 1e-6 of the domain).
+        let near = |a: f64, b: f64, w: f64| (a - b).abs() <= 1e-6 * w;
+        for (id, (u, v)) in &uvs {
+            let at_u = near(*u, lo_u, wu) || near(*u, hi_u, wu);
+            let at_v = near(*v, lo_v, wv) || near(*v, hi_v, wv);
+            if !(at_u && at_v) {
+                return Err(trimmed(format!(
+                    "vertex #{id} is not at a corner of a parameter rectangle"
+                )));
             }
         }
-        Ok(())
+        // Each edge's midpoint on a side of the rectangle.
+        let uv_of = |id: usize| uvs.iter().find(|(v, _)| *v == id).map(|(_, uv)| *uv);
+        for (pair, (edge, mid)) in ends.iter().zip(&mids) {
+            let Some(mid) = mid else { continue };
+            let (Some(a), Some(b)) = (uv_of(pair[0].0), uv_of(pair[1].0)) else {
+                continue;
+            };
+            let guess = (0.5 * (a.0 + b.0), 0.5 * (a.1 + b.1));
+            let cp = s.closest_point(mid, guess);
+            let on_side = near(cp.u, lo_u, wu * 1e3)
+                || near(cp.u, hi_u, wu * 1e3)
+                || near(cp.v, lo_v, wv * 1e3)
+                || near(cp.v, hi_v, wv * 1e3);
+            if cp.distance > tol || !on_side {
+                return Err(trimmed(format!(
+                    "edge #{edge} runs inside the parameter rectangle"
+                )));
+            }
+        }
+        Ok(((lo_u, hi_u), (lo_v, hi_v)))
     }
 
     /// The midpoint (in parameter) of a B_SPLINE_CURVE_WITH_KNOTS, `None` for other curves
@@ -967,6 +1048,73 @@ mod tests {
                 assert!((r - q).norm() < 1e-12, "{r} vs {q}");
             }
         }
+    }
+
+    /// `n` scaled about the origin.
+    fn scaled(mut n: PatchNetwork, k: f64) -> PatchNetwork {
+        let sc = |p: &mut Point3<f64>| *p = Point3::from(p.coords * k);
+        n.vertices.iter_mut().for_each(sc);
+        for e in &mut n.edges {
+            e.curve.ctrl.iter_mut().for_each(sc);
+        }
+        for f in &mut n.faces {
+            f.surface.ctrl.iter_mut().flatten().for_each(sc);
+        }
+        n
+    }
+
+    #[test]
+    fn faces_on_extended_surfaces_read_back_as_the_patches() {
+        // 0.005 mm patches: the writer extends their surfaces (export::apron).
+        let n = scaled(net(), 0.005);
+        let opts = ExportOptions::default();
+        let (eu, ev) = opts.apron_widths(&n.faces[0].surface);
+        assert!(eu > 1.0 && ev > 1.0, "{eu} {ev}");
+        let text = step_string(&n, &opts).unwrap();
+        let m = parse(&text, p()).unwrap().model(p()).unwrap();
+        assert_eq!(m.faces.len(), 2);
+        for (f, g) in m.faces.iter().zip(&n.faces) {
+            let s = &f.surface;
+            assert_eq!(s.knots_u, g.surface.knots_u);
+            assert_eq!(s.knots_v, g.surface.knots_v);
+            for (r, q) in s.ctrl.iter().flatten().zip(g.surface.ctrl.iter().flatten()) {
+                assert!((r - q).norm() < 1e-15, "{r} vs {q}");
+            }
+        }
+        // Without extension the surfaces are written as they are, with fewer control points.
+        let plain = ExportOptions {
+            extend_surfaces: crate::export::ExtendSurfaces::Never,
+            ..ExportOptions::default()
+        };
+        let count = |t: &str| t.matches("CARTESIAN_POINT").count();
+        let text2 = step_string(&n, &plain).unwrap();
+        assert_eq!(count(&text) - count(&text2), 2 * (11 * 11 - 5 * 5));
+        // A face whose vertices are not at the corners of a parameter rectangle is still
+        // refused: move one vertex along its side (it stays on the surface).
+        let flat = text2.replace("\n  ", "");
+        let vp = flat
+            .lines()
+            .find_map(|l| l.split_once("VERTEX_POINT('',#"))
+            .map(|(_, r)| r.trim_end_matches(");").to_string())
+            .unwrap();
+        let q = n.faces[0].surface.evaluate(0.5, 0.0);
+        let moved: String = flat
+            .lines()
+            .map(|l| {
+                if l.starts_with(&format!("#{vp} = ")) {
+                    format!(
+                        "#{vp} = CARTESIAN_POINT('',({},{},{}));\n",
+                        crate::export::fmt_real(q.x),
+                        crate::export::fmt_real(q.y),
+                        crate::export::fmt_real(q.z)
+                    )
+                } else {
+                    format!("{l}\n")
+                }
+            })
+            .collect();
+        let e = parse(&moved, p()).unwrap().model(p()).unwrap_err();
+        assert!(e.to_string().contains("trimmed"), "{e}");
     }
 
     #[test]

@@ -6,11 +6,16 @@
 //! - [`curve`]: [`BSplineCurve`], cubic interpolation with end tangents (eq. 9-11).
 //! - [`surface`]: [`BSplineSurface`], grid interpolation (eq. 9-14), point inversion.
 //! - [`network`]: [`PatchNetwork`], patches sewn along shared edge curves.
+//! - [`extend`]: a surface extended beyond its domain by a C1 linear apron (STEP faces as
+//!   trimmed regions of larger surfaces).
+//! - [`restrict`]: a surface restricted to a parameter sub-rectangle (knot insertion).
 
 pub mod basis;
 pub mod curve;
+pub mod extend;
 pub mod network;
 pub mod params;
+pub mod restrict;
 pub mod surface;
 
 pub use curve::BSplineCurve;

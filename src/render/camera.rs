@@ -23,6 +23,11 @@ pub enum View {
     Top,
     /// From the right (+X), looking toward -X.
     Side,
+    /// Looking up the up axis from below, front at the top of the picture (the base of a
+    /// scanned part, where its holes usually are).
+    Bottom,
+    /// From behind, looking toward the front axis.
+    Back,
 }
 
 impl FromStr for View {
@@ -33,8 +38,10 @@ impl FromStr for View {
             "front" => Ok(View::Front),
             "top" => Ok(View::Top),
             "side" | "right" => Ok(View::Side),
+            "bottom" => Ok(View::Bottom),
+            "back" => Ok(View::Back),
             other => Err(Error::InvalidOption(format!(
-                "unknown view '{other}'; expected iso, front, top or side"
+                "unknown view '{other}'; expected iso, front, top, side, bottom or back"
             ))),
         }
     }
@@ -93,6 +100,8 @@ impl Camera {
             View::Front => (Vector3::z(), Vector3::y()),
             View::Side => (Vector3::x(), Vector3::y()),
             View::Top => (Vector3::y(), -Vector3::z()),
+            View::Bottom => (-Vector3::y(), Vector3::z()),
+            View::Back => (-Vector3::z(), Vector3::y()),
             View::Iso => (Vector3::new(1.0, 1.0, 1.0).normalize(), Vector3::y()),
         };
         let (back, up_hint) = (to_model(back), to_model(up_hint));
@@ -187,7 +196,14 @@ mod tests {
     #[test]
     fn frames_are_right_handed_and_views_look_where_named() {
         for up in [UpAxis::Y, UpAxis::Z] {
-            for v in [View::Iso, View::Front, View::Top, View::Side] {
+            for v in [
+                View::Iso,
+                View::Front,
+                View::Top,
+                View::Side,
+                View::Bottom,
+                View::Back,
+            ] {
                 let (r, u, b) = Camera::frame(v, up);
                 assert!((r.cross(&u) - b).norm() < 1e-12, "{v:?} {up:?}");
                 assert!((r.norm() - 1.0).abs() < 1e-12 && r.dot(&u).abs() < 1e-12);
@@ -229,7 +245,9 @@ mod tests {
     fn parse_names() {
         assert_eq!("ISO".parse::<View>().unwrap(), View::Iso);
         assert_eq!("side".parse::<View>().unwrap(), View::Side);
-        assert!("back".parse::<View>().is_err());
+        assert_eq!("Bottom".parse::<View>().unwrap(), View::Bottom);
+        assert_eq!("back".parse::<View>().unwrap(), View::Back);
+        assert!("diagonal".parse::<View>().is_err());
         assert_eq!("z".parse::<UpAxis>().unwrap(), UpAxis::Z);
     }
 }

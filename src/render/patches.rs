@@ -135,8 +135,8 @@ pub fn network_faces(net: &PatchNetwork) -> Vec<FaceRef<'_>> {
 /// The picture `scansurf fit --preview` writes: the fitted network with its patch boundaries,
 /// coloured by the deviation of the input points when `deviation` gives one distance per
 /// point of `points` (each surface vertex takes the inverse-distance weighted deviation of its
-/// nearest input points; the scale runs from 0 to the 99th percentile so a few outliers do not wash it out), else shaded
-/// grey.
+/// nearest input points; the scale runs from 0 to the 99th percentile so a few outliers do
+/// not wash it out), else shaded grey.
 pub fn network_preview(
     net: &PatchNetwork,
     points: &[Point3<f64>],
@@ -162,8 +162,9 @@ pub fn network_preview(
 
 /// Per-vertex scalars and their colour scale for a surface coloured by the deviation of nearby
 /// input points: each vertex of `surface` takes the inverse-distance weighted mean of
-/// `deviation` over its nearest `points` ([`interpolated_values`]); the scale runs from 0 to the 99th percentile of the finite deviations, so a few
-/// outliers do not wash it out. `None` when no deviation is finite.
+/// `deviation` over its nearest `points` ([`interpolated_values`]); the scale runs from 0 to
+/// the 99th percentile of the finite deviations, so a few outliers do not wash it out. `None`
+/// when no deviation is finite.
 pub fn point_deviation_colours(
     surface: &[Point3<f64>],
     points: &[Point3<f64>],
