@@ -39,7 +39,8 @@ fn bunny_step_is_valid_closed_and_accurate() {
     let Some(input) = bunny() else { return };
     let dir = tempfile::tempdir().unwrap();
     let step = dir.path().join("bunny.step");
-    let r = fit(&input, &step, &[]);
+    let iges = dir.path().join("bunny.igs");
+    let r = fit(&input, &step, &["--iges", iges.to_str().unwrap()]);
     let patches = f(&r, &["patches"]);
     assert!(
         (patches - 1500.0).abs() <= 0.15 * 1500.0,
@@ -53,9 +54,16 @@ fn bunny_step_is_valid_closed_and_accurate() {
         "{}",
         r["support"]
     );
-    // Our own measure (exact edge parameters) of the normal jump.
+    // Our own measure (exact edge parameters) of the normal jump: the bars, max 5 and
+    // p95 1 degree (measured: max 4.6, p95 0.26, 0 of 14,100 samples over 5).
     assert!(
         f(&r, &["continuity", "all_deg", "p95"]) <= 1.0,
+        "{}",
+        r["continuity"]
+    );
+    assert!(
+        f(&r, &["continuity", "all_deg", "max"]) <= 5.0
+            && f(&r, &["continuity", "samples_over_5_deg"]) == 0.0,
         "{}",
         r["continuity"]
     );
@@ -107,8 +115,11 @@ fn bunny_step_is_valid_closed_and_accurate() {
     assert_eq!(f(&c, &["bspline_faces"]), patches);
     assert_eq!(c["closed"], true);
     assert_eq!(f(&c, &["free_edges"]), 0.0);
+    // p95 0.26 measured. Its max (14.8 measured) is not asserted: it comes from one of the
+    // 28,200 edge-point projections, caught in a local minimum of the distance where a patch
+    // turns its normal by 90 degrees over the rim of the base (docs/commands/fit.md).
     assert!(
-        f(&c, &["normal_jump_deg", "p95"]) <= 1.0,
+        f(&c, &["normal_jump_deg", "p95"]) <= 0.5,
         "{}",
         c["normal_jump_deg"]
     );
@@ -127,6 +138,25 @@ fn bunny_step_is_valid_closed_and_accurate() {
     assert!(f(d, &["mean_rel"]) <= 2e-4, "{d}");
     assert!(f(d, &["p99_rel"]) <= 1e-3, "{d}");
     assert!(f(d, &["max_rel"]) <= 5e-3, "{d}");
+    // The IGES file: the same faces, the small ones trimmed surfaces (entity 144) on the same
+    // extended surfaces, so OpenCASCADE measures the same (measured: p95 0.26, mean 0.056;
+    // with bare entity 128 surfaces p95 9.6).
+    let c = common::cad_check(&py, &script, &iges, Some(&input));
+    assert_eq!(c["read_ok"], true);
+    assert_eq!(c["reader_problems"].as_array().map(|a| a.len()), Some(0));
+    assert_eq!(c["valid"], true);
+    assert_eq!(f(&c, &["faces"]), patches);
+    assert_eq!(f(&c, &["bspline_faces"]), patches);
+    assert!(
+        f(&c, &["normal_jump_deg", "p95"]) <= 0.5,
+        "{}",
+        c["normal_jump_deg"]
+    );
+    let d = &c["deviation"];
+    assert!(
+        f(d, &["mean_rel"]) <= 2e-4 && f(d, &["max_rel"]) <= 5e-3,
+        "{d}"
+    );
 }
 
 /// IGES 5.3 of the same network reads back with one B-spline face per patch; the STEP and IGES
@@ -230,14 +260,21 @@ fn spot_fandisk_and_cow_meet_the_mean_deviation_bar() {
     }
 }
 
-/// Surface the data does not back is measured and warned about: the Utah teapot's open
-/// bottom and lid gap are closed by the implicit, 7 % of the patch area lies more than half a
-/// patch from every input point; the bunny's base holes are 0.4 %.
+/// Surface the data does not back is measured and warned about: spot with everything above
+/// y = 0.5 cut away (a quarter of its triangles), fitted with `--fill-holes implicit`, so the
+/// implicit closes the opening by extrapolation: 21 % of the patch area lies more than half a
+/// patch from every input point (measured; the bunny's base holes are 0.4 %).
 #[test]
 fn extrapolated_area_is_reported_and_warned() {
-    let Some(bunny) = bunny() else { return };
-    let input = bunny.parent().unwrap().join("teapot.obj");
+    let mut mesh = scansurf::io::read_mesh(&repo().join("fixtures/spot.obj")).unwrap();
+    let before = mesh.faces.len();
+    let positions = mesh.positions.clone();
+    mesh.faces
+        .retain(|t| t.iter().all(|&i| positions[i as usize].y < 0.5));
+    assert!(mesh.faces.len() < before * 4 / 5);
     let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("spot_cut.ply");
+    scansurf::io::write_mesh(&input, &mesh, Default::default()).unwrap();
     let (step, report) = (dir.path().join("t.step"), dir.path().join("t.json"));
     let path = |p: &std::path::Path| p.to_str().unwrap().to_string();
     let (code, _, err) = common::run(&[
@@ -248,11 +285,16 @@ fn extrapolated_area_is_reported_and_warned() {
         &path(&step),
         "--report",
         &path(&report),
+        "--patches",
+        "300",
+        "--fill-holes",
+        "implicit",
     ]);
     assert_eq!(code, 0, "{err}");
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(r["closed"], true);
     let frac = f(&r, &["support", "unsupported_fraction"]);
-    assert!(frac > 0.05 && frac < 0.2, "{}", r["support"]);
+    assert!(frac > 0.1 && frac < 0.4, "{}", r["support"]);
     assert!(
         err.contains("warning:") && err.contains("extrapolation"),
         "{err}"
@@ -305,13 +347,20 @@ fn local_hole_fills_before_the_fit() {
         common::run(&["fit", cloud_arg, "-q", "--fill-holes", "rbf", "-o", out_arg]);
     assert!(code != 0 && err.contains("needs a triangle mesh"), "{err}");
     assert!(err.contains("cloud.xyz") && !out.exists(), "{err}");
-    // The default leaves the closing to the implicit and reports no local fill.
+    // `implicit` leaves the closing to the implicit and reports no local fill; the default
+    // (`auto`) fills a mesh's holes with the local RBF.
     let r = fit(
         &input,
         &dir.path().join("implicit.step"),
-        &["--patches", "300"],
+        &["--patches", "300", "--fill-holes", "implicit"],
     );
     assert!(r.get("hole_fill").is_none());
+    let r = fit(&input, &dir.path().join("auto.step"), &["--patches", "300"]);
+    assert_eq!(r["hole_fill"]["method"], "rbf", "{}", r["hole_fill"]);
+    assert_eq!(
+        f(&r["hole_fill"], &["holes_filled"]),
+        f(&r["hole_fill"], &["loops"])
+    );
 }
 
 /// Bad options fail before any work, with a message, and leave no file behind.
@@ -333,7 +382,7 @@ fn bad_options_leave_nothing() {
         (
             "x.step",
             vec!["--fill-holes", "glue"],
-            "expected implicit, none, rbf",
+            "expected auto, implicit, none, rbf",
         ),
     ] {
         let o = bin()

@@ -34,12 +34,12 @@ pub struct Args {
     /// Fitting tolerance of the implicit surface at the input points (fraction of the diagonal).
     #[arg(long, default_value_t = 2e-4)]
     pub fit_tolerance: f64,
-    /// How holes in a mesh input are closed: `implicit` (the fitted implicit surface closes
-    /// them, seed 003; `none` is the same, for scripts that want to say so), or first by the
-    /// local fills of `fill-holes`: `rbf` (local thin-plate RBF, seed 000), `planar` (Delaunay
-    /// with circular arcs, seed 002) or `flat`. Deviation is still measured at the input's
-    /// own points.
-    #[arg(long, default_value = "implicit")]
+    /// How holes in a mesh input are closed: first by the local fills of `fill-holes`, `rbf`
+    /// (local thin-plate RBF, seed 000), `planar` (Delaunay with circular arcs, seed 002) or
+    /// `flat`; or `implicit` (the fitted implicit surface closes them, seed 003; `none` is the
+    /// same, for scripts that want to say so). `auto`: `rbf` for a mesh, `implicit` for a
+    /// point cloud. Deviation is still measured at the input's own points.
+    #[arg(long, default_value = "auto")]
     pub fill_holes: String,
     /// Anisotropic smoothing iterations on a mesh input before fitting (0 = none).
     #[arg(long, default_value_t = 0, value_name = "N")]
@@ -119,11 +119,13 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     if let Some(p) = &a.deviation_ply {
         check_ext(p, &["ply"], "the deviation cloud")?;
     }
-    let local_fill: Option<FillMethod> = match a.fill_holes.as_str() {
-        "implicit" | "none" => None,
+    // `auto` is decided once the input is read (a mesh or a cloud).
+    let auto_fill = a.fill_holes == "auto";
+    let mut local_fill: Option<FillMethod> = match a.fill_holes.as_str() {
+        "implicit" | "none" | "auto" => None,
         m => Some(m.parse().map_err(|_| {
             Error::InvalidOption(format!(
-                "--fill-holes {m}: expected implicit, none, rbf, planar or flat"
+                "--fill-holes {m}: expected auto, implicit, none, rbf, planar or flat"
             ))
         })?),
     };
@@ -150,6 +152,9 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         let adj = crate::smooth::Adjacency::build(&input)?;
         let method = crate::smooth::Method::by_name("anisotropic")?.with_iterations(a.smooth);
         crate::smooth::run(&mut input, &adj, &method, None, &Default::default())?;
+    }
+    if auto_fill && !input.faces.is_empty() {
+        local_fill = Some(FillMethod::Rbf);
     }
     if local_fill.is_some() && input.faces.is_empty() {
         return Err(Error::content(

@@ -11,7 +11,10 @@
 //!                     SHELL_BASED_SURFACE_MODEL((OPEN_SHELL)))
 //! shell faces:    ADVANCED_FACE((FACE_OUTER_BOUND(EDGE_LOOP((ORIENTED_EDGE x 4)))),
 //!                               B_SPLINE_SURFACE_WITH_KNOTS, same_sense)
-//! shared edges:   EDGE_CURVE(VERTEX_POINT, VERTEX_POINT, B_SPLINE_CURVE_WITH_KNOTS, .T.)
+//! shared edges:   EDGE_CURVE(VERTEX_POINT, VERTEX_POINT,
+//!                            SURFACE_CURVE(B_SPLINE_CURVE_WITH_KNOTS, (PCURVE x 2)), .T.)
+//! pcurves:        PCURVE(face surface, DEFINITIONAL_REPRESENTATION((2D degree-1
+//!                        B_SPLINE_CURVE_WITH_KNOTS), 2D parametric context))
 //! context:        length unit (SI), radian, steradian, UNCERTAINTY_MEASURE_WITH_UNIT
 //! ```
 //!
@@ -19,7 +22,12 @@
 //! that meet there, so a reader gets a sewn shell without a sewing tolerance. The face loop
 //! runs counter-clockwise around `S_u × S_v` ([`Side::LOOP`](crate::nurbs::Side::LOOP)); when
 //! that normal points inward (`same_sense == false`) the face and its bound are marked `.F.`.
-//! No pcurves are written (they are optional; readers compute them).
+//! Each edge carries its pcurve on both faces: the iso-line of the face's side, a straight
+//! line in the face's parameter plane, parameterized like the 3D curve (the boundary curve
+//! of a patch and its shared edge curve have the same knots). Pcurves are optional in
+//! AP214, but a reader that has none projects the 3D curve onto the surface, and on the
+//! extended surfaces below that projection can land on the apron (seen with OpenCASCADE: a
+//! bunny face trimmed to [-0.66, 2.14] x [0, 1.54] instead of its unit square).
 //!
 //! Small patches (under about 0.03 mm, [`super::apron`]) are written on their surface
 //! extended by a linear apron ([`crate::nurbs::extend`]): the face, bounded by the same shared
@@ -103,19 +111,66 @@ pub fn step_string(net: &PatchNetwork, opts: &ExportOptions) -> Result<String> {
             w.add(format!("VERTEX_POINT('',#{pt})"))
         })
         .collect();
+    // Surfaces first: the edges' pcurves refer to them.
+    let surface_ids: Vec<usize> = net
+        .faces
+        .iter()
+        .map(|f| {
+            let (eu, ev) = opts.apron_widths(&f.surface);
+            if eu > 0.0 || ev > 0.0 {
+                write_surface(&mut w, &f.surface.extended(eu, ev))
+            } else {
+                write_surface(&mut w, &f.surface)
+            }
+        })
+        .collect();
+    // Per edge, the faces using it and at which loop position.
+    let mut uses: Vec<Vec<(usize, usize, bool)>> = vec![Vec::new(); net.edges.len()];
+    for (fi, f) in net.faces.iter().enumerate() {
+        for (k, &(e, rev)) in f.edges.iter().enumerate() {
+            uses[e as usize].push((fi, k, rev));
+        }
+    }
+    let ctx2d = w.add(
+        "( GEOMETRIC_REPRESENTATION_CONTEXT(2) PARAMETRIC_REPRESENTATION_CONTEXT() REPRESENTATION_CONTEXT('2D SPACE','') )",
+    );
     let edge_ids: Vec<usize> = net
         .edges
         .iter()
-        .map(|e| {
+        .enumerate()
+        .map(|(ei, e)| {
             let curve = write_curve(&mut w, &e.curve);
+            // The edge on each of its faces: the iso-line of the face's side, linear in the
+            // edge curve's parameter (the same knots; module doc).
+            let (t0, t1) = e.curve.domain();
+            let pcurves: Vec<String> = uses[ei]
+                .iter()
+                .map(|&(fi, k, rev)| {
+                    let (a, b) = (net.side_uv(fi, k, rev, 0.0), net.side_uv(fi, k, rev, 1.0));
+                    let pa = w.add(format!("CARTESIAN_POINT('',({}))", reals([a.0, a.1])));
+                    let pb = w.add(format!("CARTESIAN_POINT('',({}))", reals([b.0, b.1])));
+                    let line = w.add(format!(
+                        "B_SPLINE_CURVE_WITH_KNOTS('',1,(#{pa},#{pb}),.UNSPECIFIED.,.F.,.F.,(2,2),({}),.UNSPECIFIED.)",
+                        reals([t0, t1])
+                    ));
+                    let rep = w.add(format!("DEFINITIONAL_REPRESENTATION('',(#{line}),#{ctx2d})"));
+                    let pc = w.add(format!("PCURVE('',#{},#{rep})", surface_ids[fi]));
+                    format!("#{pc}")
+                })
+                .collect();
+            let geometry = w.add(format!(
+                "SURFACE_CURVE('',#{curve},({}),.PCURVE_S1.)",
+                pcurves.join(",")
+            ));
             let (a, b) = (vertex_ids[e.v[0] as usize], vertex_ids[e.v[1] as usize]);
-            w.add(format!("EDGE_CURVE('',#{a},#{b},#{curve},.T.)"))
+            w.add(format!("EDGE_CURVE('',#{a},#{b},#{geometry},.T.)"))
         })
         .collect();
     let face_ids: Vec<usize> = net
         .faces
         .iter()
-        .map(|f| {
+        .zip(&surface_ids)
+        .map(|(f, &surf)| {
             let oriented: Vec<String> = f
                 .edges
                 .iter()
@@ -133,12 +188,6 @@ pub fn step_string(net: &PatchNetwork, opts: &ExportOptions) -> Result<String> {
                 "FACE_OUTER_BOUND('',#{lp},{})",
                 logical(f.same_sense)
             ));
-            let (eu, ev) = opts.apron_widths(&f.surface);
-            let surf = if eu > 0.0 || ev > 0.0 {
-                write_surface(&mut w, &f.surface.extended(eu, ev))
-            } else {
-                write_surface(&mut w, &f.surface)
-            };
             w.add(format!(
                 "ADVANCED_FACE('',(#{bound}),#{surf},{})",
                 logical(f.same_sense)
@@ -371,8 +420,11 @@ mod tests {
         assert_eq!(count("OPEN_SHELL("), 1);
         assert_eq!(count("CLOSED_SHELL("), 0);
         assert_eq!(count("MANIFOLD_SURFACE_SHAPE_REPRESENTATION("), 1);
-        // 25 surface + 4 x 5 curve + 4 vertex + 1 origin control points.
-        assert_eq!(count("CARTESIAN_POINT("), 25 + 20 + 4 + 1);
+        // 25 surface + 4 x 5 curve + 4 vertex + 1 origin control points, and the two 2D
+        // points of each edge's pcurve on the face.
+        assert_eq!(count("CARTESIAN_POINT("), 25 + 20 + 4 + 1 + 8);
+        assert_eq!(count("SURFACE_CURVE("), 4);
+        assert_eq!(count("PCURVE("), 4);
         assert!(s.contains("(4,1,4),(4,1,4),(0.,0.5,1.),(0.,0.5,1.)"));
         // Every referenced id exists exactly once.
         let defined = count("\n#");

@@ -11,6 +11,7 @@
 //! - [`spline_check`]: the complete cubic spline a row of samples will become, for the
 //!   tolerance test;
 //! - [`samples`]: the per-patch grids, their counts chosen from `--tolerance`.
+//! - [`vertex_twists`]: corner twists made first-order compatible around every net vertex.
 
 pub mod cross_tangents;
 pub mod edge_curve;
@@ -19,3 +20,4 @@ pub mod pipeline;
 pub mod ribbons;
 pub mod samples;
 pub mod spline_check;
+pub mod vertex_twists;

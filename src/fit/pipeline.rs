@@ -5,12 +5,15 @@
 //! patches by point inversion, normal jump across shared edges, quad quality, timings.
 
 use super::cross_tangents::{align_cross_derivatives, corner_twists, BoundarySplines};
-use super::net::{fit_net, NetReport, PatchSize};
-use super::samples::{sample_patches, SampleOptions, SampleReport};
+use super::net::{fit_net, NetReport, PatchSize, TrialScore};
+use super::samples::{sample_patches, PatchSampling, SampleOptions, SampleReport};
+use super::vertex_twists::{corners_of, solve_vertex_twists, Corner};
 use crate::implicit::pou::{FitOptions as ImplicitOptions, FitStats, PouImplicit};
+use crate::implicit::Implicit;
 use crate::mesh::{Aabb, Mesh};
 use crate::normals::{oriented_points, NormalSource};
 use crate::nurbs::{BSplineSurface, Params, PatchGrid, PatchInput, PatchNetwork, Twist};
+use crate::polygonize::QuadNet;
 use crate::quality::{
     deviation_from_patches, normal_jumps, surface_support, ContinuityReport, PatchDeviation,
     SupportReport,
@@ -47,6 +50,9 @@ pub struct FitOptions {
 /// samples a cubic B-spline on its uniform 44-line grid (more spans give 3 lines per span,
 /// too close together on a patch that small).
 pub const APRON_MAX_INTERVALS: usize = 12;
+
+/// Sample intervals per side of the trial patches that rank the grid placements.
+const TRIAL_INTERVALS: usize = 4;
 
 impl Default for FitOptions {
     fn default() -> Self {
@@ -155,7 +161,20 @@ pub fn fit_measured(
 
     progress("quad net", 0.3);
     let t = Instant::now();
-    let (net, net_report) = fit_net(&f, &op.points, &bounds, opts.size)?;
+    // Each grid placement's net is tried as patches: TRIAL_INTERVALS samples per side, no
+    // refinement (a tenth of the real sampling's cost), its jumps over 5 degrees counted.
+    let trial_tol = opts.tolerance * diag;
+    let trial = |net: &QuadNet| -> Option<TrialScore> {
+        let mut o = SampleOptions::new(trial_tol, diag);
+        (o.min_intervals, o.max_intervals, o.max_rounds) = (TRIAL_INTERVALS, TRIAL_INTERVALS, 1);
+        let sampling = sample_patches(net, &f, &o).ok()?;
+        let network = patch_network(&f, net, &sampling).ok()?;
+        let c = normal_jumps(&network, opts.jump_samples);
+        Some(TrialScore {
+            samples_over_5_deg: c.samples_over_5_deg,
+        })
+    };
+    let (net, net_report) = fit_net(&f, &op.points, &bounds, opts.size, &trial)?;
     timings.net = t.elapsed().as_secs_f64();
 
     progress("sampling", 0.5);
@@ -177,34 +196,7 @@ pub fn fit_measured(
 
     progress("patches", 0.7);
     let t = Instant::now();
-    let inputs: Vec<PatchInput> = sampling
-        .patches
-        .par_iter()
-        .map(|s| {
-            let mut s = s.clone();
-            let (pu, pv) = (Params::new(&s.params_u)?, Params::new(&s.params_v)?);
-            let splines = BoundarySplines::of(&s, &pu, &pv)?;
-            align_cross_derivatives(&mut s, &sampling.edges, &splines)?;
-            let mut grid = PatchGrid {
-                points: s.points,
-                du_u0: s.tan_u0,
-                du_u1: s.tan_u1,
-                dv_v0: s.tan_v0,
-                dv_v1: s.tan_v1,
-                twist: Twist::Estimate,
-            };
-            grid.twist = Twist::Given(corner_twists(&f, &grid, &pu, &pv, &splines)?);
-            let surface = BSplineSurface::interpolate_grid(&grid, &pu, &pv)?;
-            Ok(PatchInput {
-                surface,
-                corners: s.corners,
-                // Quads are counter-clockwise seen from outside, corners (0,0), (1,0), (1,1),
-                // (0,1): S_u x S_v points out.
-                same_sense: true,
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let network = PatchNetwork::from_patches(net.nodes.clone(), inputs)?;
+    let network = patch_network(&f, &net, &sampling)?;
     timings.patches = t.elapsed().as_secs_f64();
 
     progress("deviation", 0.85);
@@ -254,4 +246,82 @@ pub fn fit_measured(
         timings,
     };
     Ok((network, report))
+}
+
+/// One bicubic patch per quad of `net` from its samples (seed 004 eq. 9-14): cross
+/// derivatives aligned with the boundary splines, corner twists from the implicit
+/// ([`super::cross_tangents`]), the grid interpolated; the patches sewn along the net's edges.
+pub fn patch_network<I: Implicit + Sync + ?Sized>(
+    f: &I,
+    net: &QuadNet,
+    sampling: &PatchSampling,
+) -> Result<PatchNetwork> {
+    type Prepared = (
+        PatchGrid,
+        Params,
+        Params,
+        [Corner; 4],
+        [nalgebra::Vector3<f64>; 4],
+    );
+    let prepared: Vec<Prepared> = sampling
+        .patches
+        .par_iter()
+        .map(|s| {
+            let mut s = s.clone();
+            let (pu, pv) = (Params::new(&s.params_u)?, Params::new(&s.params_v)?);
+            let splines = BoundarySplines::of(&s, &pu, &pv)?;
+            align_cross_derivatives(&mut s, &sampling.edges, &splines)?;
+            let grid = PatchGrid {
+                points: s.points,
+                du_u0: s.tan_u0,
+                du_u1: s.tan_u1,
+                dv_v0: s.tan_v0,
+                dv_v1: s.tan_v1,
+                twist: Twist::Estimate,
+            };
+            let twists = corner_twists(f, &grid, &pu, &pv, &splines)?;
+            let [v0, u1, v1, u0] = &splines.sides;
+            let (ua, ub) = (pu.as_slice()[0], pu.as_slice()[pu.as_slice().len() - 1]);
+            let (va, vb) = (pv.as_slice()[0], pv.as_slice()[pv.as_slice().len() - 1]);
+            let suu = [
+                v0.derivative(ua, 2),
+                v0.derivative(ub, 2),
+                v1.derivative(ua, 2),
+                v1.derivative(ub, 2),
+            ];
+            let svv = [
+                u0.derivative(va, 2),
+                u1.derivative(va, 2),
+                u0.derivative(vb, 2),
+                u1.derivative(vb, 2),
+            ];
+            let corners = corners_of(&grid, suu, svv);
+            Ok((grid, pu, pv, corners, twists))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let corners: Vec<[Corner; 4]> = prepared.iter().map(|p| p.3).collect();
+    let mut twists: Vec<[nalgebra::Vector3<f64>; 4]> = prepared.iter().map(|p| p.4).collect();
+    let normal = |node: u32| {
+        net.nodes
+            .get(node as usize)
+            .and_then(|p| f.gradient(p).try_normalize(0.0))
+    };
+    solve_vertex_twists(&sampling.patches, &corners, &normal, &mut twists);
+    let inputs: Vec<PatchInput> = prepared
+        .into_par_iter()
+        .zip(twists.into_par_iter())
+        .zip(sampling.patches.par_iter())
+        .map(|(((mut grid, pu, pv, _, _), tw), s)| {
+            grid.twist = Twist::Given(tw);
+            let surface = BSplineSurface::interpolate_grid(&grid, &pu, &pv)?;
+            Ok(PatchInput {
+                surface,
+                corners: s.corners,
+                // Quads are counter-clockwise seen from outside, corners (0,0), (1,0), (1,1),
+                // (0,1): S_u x S_v points out.
+                same_sense: true,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    PatchNetwork::from_patches(net.nodes.clone(), inputs)
 }

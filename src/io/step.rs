@@ -951,6 +951,17 @@ impl StepFile {
     /// or malformed data (then only the edge ends are checked).
     fn curve_midpoint(&self, id: usize) -> Option<Point3<f64>> {
         let inst = self.instances.get(&id)?;
+        // A SURFACE_CURVE (or SEAM_CURVE) wraps the 3D curve with its pcurves.
+        if let Some(r) = inst
+            .record("SURFACE_CURVE")
+            .or(inst.record("SEAM_CURVE"))
+            .filter(|_| inst.records.len() == 1)
+        {
+            return match r.args.get(1) {
+                Some(Value::Ref(c)) if *c != id => self.curve_midpoint(*c),
+                _ => None,
+            };
+        }
         let r = inst.record("B_SPLINE_CURVE_WITH_KNOTS")?;
         if inst.records.len() != 1 {
             return None;

@@ -134,6 +134,25 @@ impl PatchNetwork {
         Ok(net)
     }
 
+    /// Parameters (u, v) on face `face` of the point at `t` in [0, 1] along its loop side `k`
+    /// (`faces[face].edges[k]`), `t` running in the edge's own direction (`reversed` as
+    /// stored in the face's edge list): the side's iso-line, linear in `t`, which is also how
+    /// the edge curve's parameter maps onto the face (both have the same knots).
+    pub fn side_uv(&self, face: usize, k: usize, reversed: bool, t: f64) -> (f64, f64) {
+        let s = &self.faces[face].surface;
+        let (u0, u1) = s.domain_u();
+        let (v0, v1) = s.domain_v();
+        // Position along the loop direction of this side.
+        let loop_t = if reversed { 1.0 - t } else { t };
+        let lerp = |a: f64, b: f64, x: f64| a + (b - a) * x;
+        match Side::LOOP[k] {
+            Side::V0 => (lerp(u0, u1, loop_t), v0),
+            Side::U1 => (u1, lerp(v0, v1, loop_t)),
+            Side::V1 => (lerp(u1, u0, loop_t), v1),
+            Side::U0 => (u0, lerp(v1, v0, loop_t)),
+        }
+    }
+
     /// How many faces use each edge.
     pub fn edge_use_counts(&self) -> Vec<usize> {
         let mut uses = vec![0usize; self.edges.len()];

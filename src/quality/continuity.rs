@@ -7,7 +7,7 @@
 //! (Peters & Fan): the report therefore separates edge samples next to such vertices from the
 //! rest, so the shortfall is measured where it is, not averaged away.
 
-use crate::nurbs::{PatchNetwork, Side};
+use crate::nurbs::PatchNetwork;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -72,23 +72,6 @@ pub struct JumpSample {
     pub near_irregular: bool,
 }
 
-/// Parameters (u, v) on `face` of the point at `t` in [0, 1] along loop side `k`, in the
-/// edge's own direction (`reversed` as stored in the face's edge list).
-fn side_uv(net: &PatchNetwork, face: usize, k: usize, reversed: bool, t: f64) -> (f64, f64) {
-    let s = &net.faces[face].surface;
-    let (u0, u1) = s.domain_u();
-    let (v0, v1) = s.domain_v();
-    // Position along the loop direction of this side.
-    let loop_t = if reversed { 1.0 - t } else { t };
-    let lerp = |a: f64, b: f64, x: f64| a + (b - a) * x;
-    match Side::LOOP[k] {
-        Side::V0 => (lerp(u0, u1, loop_t), v0),
-        Side::U1 => (u1, lerp(v0, v1, loop_t)),
-        Side::V1 => (lerp(u1, u0, loop_t), v1),
-        Side::U0 => (u0, lerp(v1, v0, loop_t)),
-    }
-}
-
 /// Measures the normal jump at `samples_per_edge` interior points of every shared edge
 /// (evenly spaced, (i + 0.5) / n, as cad_check does).
 pub fn normal_jumps(net: &PatchNetwork, samples_per_edge: usize) -> ContinuityReport {
@@ -120,7 +103,7 @@ pub fn normal_jumps(net: &PatchNetwork, samples_per_edge: usize) -> ContinuityRe
                     let mut normals = [nalgebra::Vector3::zeros(); 2];
                     let mut point = [0.0; 3];
                     for (slot, &(fi, k, rev)) in u.iter().enumerate() {
-                        let (uu, vv) = side_uv(net, fi, k, rev, t);
+                        let (uu, vv) = net.side_uv(fi, k, rev, t);
                         let face = &net.faces[fi];
                         if slot == 0 {
                             let p = face.surface.evaluate(uu, vv);

@@ -33,7 +33,8 @@ pub fn surface_support(
     data: &KdTree,
     threshold: f64,
 ) -> SupportReport {
-    let (area, unsupported) = grids
+    // Per-grid sums collected, then added in grid order: the same bits at any thread count.
+    let per_grid: Vec<(f64, f64)> = grids
         .par_iter()
         .map(|g| {
             let mut a = (0.0, 0.0);
@@ -57,7 +58,10 @@ pub fn surface_support(
             }
             a
         })
-        .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
+        .collect();
+    let (area, unsupported) = per_grid
+        .iter()
+        .fold((0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
     SupportReport {
         threshold,
         area,
