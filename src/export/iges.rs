@@ -110,9 +110,8 @@ pub fn iges_string(net: &PatchNetwork, opts: &ExportOptions) -> Result<String> {
         } else {
             reverse_u(&f.surface)
         };
-        let (eu, ev) = opts.apron_widths(&surface);
         let subscript = k + 1;
-        if eu <= 0.0 && ev <= 0.0 {
+        let Some(extended) = opts.extended_surface(&surface) else {
             entities.push(Entity::new(
                 128,
                 entity_128(&surface),
@@ -120,7 +119,7 @@ pub fn iges_string(net: &PatchNetwork, opts: &ExportOptions) -> Result<String> {
                 subscript,
             ));
             continue;
-        }
+        };
         // DE numbers of the four entities about to be pushed (two records each).
         let de = |offset: usize| 2 * (entities.len() + offset) + 1;
         let (de_surface, de_pcurve, de_boundary) = (de(0), de(1), de(2));
@@ -128,7 +127,7 @@ pub fn iges_string(net: &PatchNetwork, opts: &ExportOptions) -> Result<String> {
         let (v0, v1) = surface.domain_v();
         entities.push(Entity::new(
             128,
-            entity_128(&surface.extended(eu, ev)),
+            entity_128(&extended),
             DEPENDENT,
             subscript,
         ));

@@ -249,6 +249,16 @@ impl ExportOptions {
         }
     }
 
+    /// The extended surface a face on `s` is written on (STEP and IGES alike), `None` when the
+    /// face is written as its whole surface.
+    pub fn extended_surface(
+        &self,
+        s: &crate::nurbs::BSplineSurface,
+    ) -> Option<crate::nurbs::BSplineSurface> {
+        let (eu, ev) = self.apron_widths(s);
+        (eu > 0.0 || ev > 0.0).then(|| s.extended(eu, ev))
+    }
+
     pub(crate) fn time(&self) -> Timestamp {
         self.timestamp.unwrap_or(Timestamp::EPOCH)
     }

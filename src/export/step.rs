@@ -116,12 +116,8 @@ pub fn step_string(net: &PatchNetwork, opts: &ExportOptions) -> Result<String> {
         .faces
         .iter()
         .map(|f| {
-            let (eu, ev) = opts.apron_widths(&f.surface);
-            if eu > 0.0 || ev > 0.0 {
-                write_surface(&mut w, &f.surface.extended(eu, ev))
-            } else {
-                write_surface(&mut w, &f.surface)
-            }
+            let extended = opts.extended_surface(&f.surface);
+            write_surface(&mut w, extended.as_ref().unwrap_or(&f.surface))
         })
         .collect();
     // Per edge, the faces using it and at which loop position.

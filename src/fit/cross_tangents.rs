@@ -142,8 +142,8 @@ pub fn align_cross_derivatives(
             1 => &mut patch.tan_u1,
             _ => &mut patch.tan_u0,
         };
-        // e_i = N'_i x a_i at every interior sample, from shared data only.
-        let dirs: Option<Vec<Vector3<f64>>> = (1..n - 1)
+        // (N'_i, e_i = N'_i x a_i) at every interior sample, from shared data only.
+        let frames: Option<Vec<(Vector3<f64>, Vector3<f64>)>> = (1..n - 1)
             .map(|i| {
                 let normal = if side.reversed {
                     edge.normals[n - 1 - i]
@@ -152,29 +152,28 @@ pub fn align_cross_derivatives(
                 };
                 let a = curve.derivative(params[i], 1).try_normalize(0.0)?;
                 let np = (normal - a * normal.dot(&a)).try_normalize(1e-12)?;
-                Some(np.cross(&a))
+                Some((np, np.cross(&a)))
             })
             .collect();
-        let Some(dirs) = dirs else { continue };
+        let Some(frames) = frames else { continue };
         if n - 1 < MIN_SHARED_INTERVALS {
             // Every interval touches a corner: keep the own derivatives (with their shear),
             // projected into the plane of a_i and e_i (the normal is still N' at the sample).
-            for i in 1..n - 1 {
-                let a = curve.derivative(params[i], 1).try_normalize(0.0);
-                if let Some(np) = a.and_then(|a| a.cross(&dirs[i - 1]).try_normalize(0.0)) {
-                    let c = cross[i];
-                    cross[i] = c - np * np.dot(&c);
-                }
+            for (d, (np, _)) in cross[1..n - 1].iter_mut().zip(&frames) {
+                *d -= np * d.dot(np);
             }
             continue;
         }
         // One length per side: the mean of the own derivatives' components along e.
-        let m = (1..n - 1).map(|i| cross[i].dot(&dirs[i - 1])).sum::<f64>() / (n - 2) as f64;
+        let m = (1..n - 1)
+            .map(|i| cross[i].dot(&frames[i - 1].1))
+            .sum::<f64>()
+            / (n - 2) as f64;
         if !m.is_finite() {
             continue;
         }
-        for i in 1..n - 1 {
-            cross[i] = dirs[i - 1] * m;
+        for (d, (_, e)) in cross[1..n - 1].iter_mut().zip(&frames) {
+            *d = e * m;
         }
     }
     Ok(())

@@ -163,9 +163,9 @@ pub fn fit_measured(
     let t = Instant::now();
     // Each grid placement's net is tried as patches: TRIAL_INTERVALS samples per side, no
     // refinement (a tenth of the real sampling's cost), its jumps over 5 degrees counted.
-    let trial_tol = opts.tolerance * diag;
+    let tol = opts.tolerance * diag;
     let trial = |net: &QuadNet| -> Option<TrialScore> {
-        let mut o = SampleOptions::new(trial_tol, diag);
+        let mut o = SampleOptions::new(tol, diag);
         (o.min_intervals, o.max_intervals, o.max_rounds) = (TRIAL_INTERVALS, TRIAL_INTERVALS, 1);
         let sampling = sample_patches(net, &f, &o).ok()?;
         let network = patch_network(&f, net, &sampling).ok()?;
@@ -179,7 +179,6 @@ pub fn fit_measured(
 
     progress("sampling", 0.5);
     let t = Instant::now();
-    let tol = opts.tolerance * diag;
     let mut sample_opts = SampleOptions::new(tol, diag);
     if opts
         .apron_unit

@@ -899,16 +899,12 @@ impl StepFile {
                 locate(&p).ok_or_else(|| trimmed(format!("vertex #{id} is not on the surface")))?;
             uvs.push((id, uv));
         }
-        let lo_u = uvs.iter().map(|(_, uv)| uv.0).fold(f64::INFINITY, f64::min);
-        let hi_u = uvs
-            .iter()
-            .map(|(_, uv)| uv.0)
-            .fold(f64::NEG_INFINITY, f64::max);
-        let lo_v = uvs.iter().map(|(_, uv)| uv.1).fold(f64::INFINITY, f64::min);
-        let hi_v = uvs
-            .iter()
-            .map(|(_, uv)| uv.1)
-            .fold(f64::NEG_INFINITY, f64::max);
+        let (mut lo_u, mut hi_u) = (f64::INFINITY, f64::NEG_INFINITY);
+        let (mut lo_v, mut hi_v) = (f64::INFINITY, f64::NEG_INFINITY);
+        for &(_, (u, v)) in &uvs {
+            (lo_u, hi_u) = (lo_u.min(u), hi_u.max(u));
+            (lo_v, hi_v) = (lo_v.min(v), hi_v.max(v));
+        }
         if !(hi_u - lo_u > 1e-9 * wu && hi_v - lo_v > 1e-9 * wv) {
             return Err(trimmed(
                 "its vertices do not span a parameter rectangle".into(),

@@ -969,24 +969,36 @@ impl<I: Implicit + ?Sized> Builder<'_, I> {
 
     fn apply(&mut self, fix: Fix) -> Result<()> {
         for i in fix.voxels {
-            let Some(k) = self.grid.key(i) else { continue };
-            self.class(i)?;
-            if let Some(v) = self.vox.get_mut(&k) {
-                if v.inside == fix.inside {
-                    continue;
-                }
-                v.inside = fix.inside;
-                v.rep = fix.rep;
-                v.frep = fix.frep;
+            if !self.set_voxel(i, fix.inside, fix.rep, fix.frep)? {
+                continue;
             }
             if fix.inside {
                 self.stats.repair_added += 1;
             } else {
                 self.stats.repair_removed += 1;
             }
-            self.expand(k)?;
         }
         Ok(())
+    }
+
+    /// Sets voxel `i` inside or outside with representative point `rep` (f there `frep`) and
+    /// evaluates the band around it; false (nothing done) when it is off the grid or already
+    /// in that state.
+    fn set_voxel(&mut self, i: Idx, inside: bool, rep: Point3<f64>, frep: f64) -> Result<bool> {
+        let Some(k) = self.grid.key(i) else {
+            return Ok(false);
+        };
+        self.class(i)?;
+        if let Some(v) = self.vox.get_mut(&k) {
+            if v.inside == inside {
+                return Ok(false);
+            }
+            v.inside = inside;
+            v.rep = rep;
+            v.frep = frep;
+        }
+        self.expand(k)?;
+        Ok(true)
     }
 
     /// Faces between a known inside voxel and a known outside one (off-grid counts as outside),
@@ -1139,17 +1151,10 @@ impl<I: Implicit + ?Sized> Builder<'_, I> {
             for vk in verts {
                 let v = Grid::unkey(vk);
                 if let Some((pick, rep, frep)) = self.two_sheet_fix(v)? {
-                    let Some(k) = self.grid.key(pick) else {
-                        continue;
-                    };
-                    if let Some(vx) = self.vox.get_mut(&k) {
-                        vx.inside = true;
-                        vx.rep = rep;
-                        vx.frep = frep;
+                    if self.set_voxel(pick, true, rep, frep)? {
+                        self.stats.sheet_voxels += 1;
+                        fixes += 1;
                     }
-                    self.expand(k)?;
-                    self.stats.sheet_voxels += 1;
-                    fixes += 1;
                 }
             }
             added += fixes;
