@@ -55,7 +55,7 @@ fn bunny_step_is_valid_closed_and_accurate() {
         r["support"]
     );
     // Our own measure (exact edge parameters) of the normal jump: the bars, max 5 and
-    // p95 1 degree (measured: max 4.6, p95 0.26, 0 of 14,100 samples over 5).
+    // p95 1 degree (measured: max 3.2, p95 0.24, 0 of 14,100 samples over 5).
     assert!(
         f(&r, &["continuity", "all_deg", "p95"]) <= 1.0,
         "{}",
@@ -75,8 +75,17 @@ fn bunny_step_is_valid_closed_and_accurate() {
     // Spike guard: at the crease of the base two interior section rows once ran onto the
     // bottom sheet (max 1.7e-3); with those rows rejected the max was 1.16e-3 at 16
     // intervals per side, 1.55e-3 at the 12 that patches this small get (the crease itself,
-    // less finely sampled).
+    // less finely sampled); 7.9e-4 since the implicit's blending band widened.
     assert!(f(dev, &["max"]) <= 1.6e-3, "{dev}");
+    // Folds: patches whose normal turns more than 45 degrees away from the implicit's at
+    // all four corners of some grid cell (measured: 1, a pit 1e-4 across on the flat base
+    // near its rim; 5 with seed 003's 10 % overlap alone, before the implicit's blending band
+    // widened).
+    assert!(
+        f(&r, &["folds", "patches_over_45_deg"]) <= 3.0,
+        "{}",
+        r["folds"]
+    );
     assert_eq!(f(&r, &["sampling", "max_intervals"]), 12.0);
     // Patches under 0.06 mm (the bunny read as millimetres): every STEP face lies on a surface
     // extended by an apron, so that OpenCASCADE's point projection finds its edge points.
@@ -108,10 +117,10 @@ fn bunny_step_is_valid_closed_and_accurate() {
         return;
     };
     // Both files: read back valid with one B-spline face per patch, the normal jump and the
-    // deviation within the bars. The normal jump's p95 measured 0.26 on both. Its max (14.8
-    // measured) is not asserted: it comes from one of the 28,200 edge-point projections,
-    // caught in a local minimum of the distance where a patch turns its normal by 90 degrees
-    // over the rim of the base (docs/commands/fit.md). The IGES file has the same faces, the
+    // deviation within the bars: the max 5 degrees (measured 3.2 on both, equal to
+    // ours: none of the 28,200 edge-point projections misses; 14.8 before the implicit's
+    // blending band widened and the net relaxed unrolled, one projection caught in a fold at
+    // the rim of the base) and p95 (measured 0.24). The IGES file has the same faces, the
     // small ones trimmed surfaces (entity 144) on the same extended surfaces (with bare entity
     // 128 surfaces its p95 read 9.6).
     let read_back = |file: &std::path::Path| {
@@ -122,7 +131,7 @@ fn bunny_step_is_valid_closed_and_accurate() {
         assert_eq!(f(&c, &["faces"]), patches);
         assert_eq!(f(&c, &["bspline_faces"]), patches);
         assert!(
-            f(&c, &["normal_jump_deg", "p95"]) <= 0.5,
+            f(&c, &["normal_jump_deg", "p95"]) <= 0.5 && f(&c, &["normal_jump_deg", "max"]) <= 5.0,
             "{}",
             c["normal_jump_deg"]
         );

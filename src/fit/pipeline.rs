@@ -15,8 +15,8 @@ use crate::normals::{oriented_points, NormalSource};
 use crate::nurbs::{BSplineSurface, Params, PatchGrid, PatchInput, PatchNetwork, Twist};
 use crate::polygonize::QuadNet;
 use crate::quality::{
-    deviation_from_patches, normal_jumps, surface_support, ContinuityReport, PatchDeviation,
-    SupportReport,
+    deviation_from_patches, folds, normal_jumps, surface_support, ContinuityReport, FoldReport,
+    PatchDeviation, SampleGrid, SupportReport,
 };
 use crate::spatial::KdTree;
 use crate::{Error, Result};
@@ -76,6 +76,7 @@ pub struct FitTimings {
     pub sampling: f64,
     pub patches: f64,
     pub deviation: f64,
+    /// Normal jumps and folds.
     pub continuity: f64,
     pub total: f64,
 }
@@ -104,6 +105,8 @@ pub struct FitReport {
     pub deviation: PatchDeviation,
     /// Normal jump across shared patch edges, in degrees.
     pub continuity: ContinuityReport,
+    /// Patches whose normal turns away from the implicit's ([`crate::quality::folds`]).
+    pub folds: FoldReport,
     /// Patch area farther than half a voxel (h / 2) from every point the implicit was fitted
     /// to: surface the data does not back (openings closed by extrapolation).
     pub support: SupportReport,
@@ -206,6 +209,16 @@ pub fn fit_measured(
     progress("continuity", 0.95);
     let t = Instant::now();
     let continuity = normal_jumps(&network, opts.jump_samples);
+    let grids: Vec<SampleGrid<'_>> = sampling
+        .patches
+        .iter()
+        .map(|p| SampleGrid {
+            points: &p.points,
+            params_u: &p.params_u,
+            params_v: &p.params_v,
+        })
+        .collect();
+    let folds = folds(&f, &network, &grids);
     timings.continuity = t.elapsed().as_secs_f64();
     timings.total = t_all.elapsed().as_secs_f64();
 
@@ -239,6 +252,7 @@ pub fn fit_measured(
         closed: network.closed,
         deviation,
         continuity,
+        folds,
         support,
         hole_fill: None,
         step: None,

@@ -14,6 +14,7 @@ pub mod marching_cubes;
 pub mod relax;
 pub mod subdivide;
 
+pub mod log_map;
 pub mod net_quality;
 pub mod net_smooth;
 pub mod newton;

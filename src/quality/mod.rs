@@ -4,9 +4,11 @@
 //! surfaces, not on a tessellation.
 
 pub mod continuity;
+pub mod folds;
 pub mod patch_deviation;
 pub mod support;
 
 pub use continuity::{normal_jumps, ContinuityReport};
+pub use folds::{folds, FoldReport, SampleGrid};
 pub use patch_deviation::{deviation_from_patches, PatchDeviation};
 pub use support::{surface_support, SupportReport};
