@@ -209,7 +209,7 @@ pub fn fit_measured(
     progress("continuity", 0.95);
     let t = Instant::now();
     let continuity = normal_jumps(&network, opts.jump_samples);
-    let grids: Vec<SampleGrid<'_>> = sampling
+    let sample_grids: Vec<SampleGrid<'_>> = sampling
         .patches
         .iter()
         .map(|p| SampleGrid {
@@ -218,7 +218,7 @@ pub fn fit_measured(
             params_v: &p.params_v,
         })
         .collect();
-    let folds = folds(&f, &network, &grids);
+    let folds = folds(&f, &network, &sample_grids);
     timings.continuity = t.elapsed().as_secs_f64();
     timings.total = t_all.elapsed().as_secs_f64();
 

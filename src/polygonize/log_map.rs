@@ -1,7 +1,8 @@
 //! Discrete log map at a net node: where a neighbouring node lands when the surface around the
-//! node is unrolled onto its tangent plane. Used to judge and relax the net by the angles the
-//! patches will see (their corner tangents lie in the node's tangent plane), not by the angles
-//! of the chords in space.
+//! node is unrolled onto its tangent plane. The net is relaxed in these unrolled
+//! neighbourhoods ([`super::net_smooth`]), and its corners judged by their angles there
+//! ([`unrolled_angle`], in the tests): the angles the patches will see (their corner tangents
+//! lie in the node's tangent plane), not the angles of the chords in space.
 //!
 //! **Why.** Seed 004's patches take their corner tangents from the implicit's tangent plane at
 //! the net node. Where the net wraps a crease rounded below the patch size (the rim of the

@@ -3,17 +3,18 @@
 //! Each patch interpolates a grid of points on f = 0 (seed 004 eq. 9-14) and, at the grid
 //! points, its normal S_u x S_v is close to the implicit's unit gradient n. Between them the
 //! bicubic can turn over: where two boundary curves leave a corner almost in one direction
-//! (a sliver corner), or where the implicit has a feature narrower than a grid cell. A fold
-//! is where the surface's normal points more than 45 degrees away from n at the nearest grid
-//! point; a CAD system sees such a spot as a crease or a small pocket, and OpenCASCADE's
-//! point projection can fall into it (a local minimum of the distance).
+//! (a sliver corner), or where the implicit has a feature narrower than a grid cell. A CAD
+//! system sees such a spot as a crease or a small pocket, and OpenCASCADE's point projection
+//! can fall into it (a local minimum of the distance).
 //!
 //! **Measure.** For every grid cell of every patch, the normal of the patch at the cell's
 //! centre is compared with the unit gradients of f at the cell's four grid points; the cell's
 //! fold angle is the smallest of the four angles (a surface that merely turns across the cell,
 //! over a rounded crease, stays close to one of its corners' normals; a fold faces away from
-//! all of them), and a patch's fold angle is the largest over its cells. Nothing here changes the patches: it is the figure the `fit`
-//! report gives so that a user sees how many patches to inspect (`worst` lists where).
+//! all of them), and a patch's fold angle is the largest over its cells. A patch is folded
+//! when that angle exceeds [`FOLD_DEG`]. Nothing here changes the patches: it is the figure
+//! the `fit` report gives so that a user sees how many patches to inspect (`worst` lists
+//! where).
 
 use crate::implicit::Implicit;
 use crate::nurbs::PatchNetwork;
