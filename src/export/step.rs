@@ -34,7 +34,7 @@
 //! edge curves, is then a trimmed region of a larger B_SPLINE_SURFACE_WITH_KNOTS, which
 //! OpenCASCADE's point projection handles where it fails on the bare patch.
 
-use super::{fmt_real, software, ExportOptions};
+use super::{fmt_real, push_real, software, ExportOptions};
 use crate::nurbs::basis::multiplicities;
 use crate::nurbs::{BSplineCurve, BSplineSurface, PatchNetwork};
 use crate::{Error, Result};
@@ -223,8 +223,11 @@ pub fn step_string(net: &PatchNetwork, opts: &ExportOptions) -> Result<String> {
         ),
     );
     out.push_str("FILE_SCHEMA(('AUTOMOTIVE_DESIGN { 1 0 10303 214 1 1 1 1 }'));\nENDSEC;\nDATA;\n");
+    let mut line = String::new();
     for (i, body) in w.bodies.iter().enumerate() {
-        wrap_into(&mut out, &format!("#{} = {body};", i + 1));
+        line.clear();
+        let _ = write!(line, "#{} = {body};", i + 1);
+        wrap_into(&mut out, &line);
     }
     out.push_str("ENDSEC;\nEND-ISO-10303-21;\n");
     Ok(out)
@@ -269,11 +272,27 @@ fn refs(ids: &[usize]) -> String {
 }
 
 fn reals(xs: impl IntoIterator<Item = f64>) -> String {
-    xs.into_iter().map(fmt_real).collect::<Vec<_>>().join(",")
+    let mut s = String::new();
+    for (k, x) in xs.into_iter().enumerate() {
+        if k > 0 {
+            s.push(',');
+        }
+        push_real(&mut s, x);
+    }
+    s
 }
 
 fn cartesian_point(p: &Point3<f64>) -> String {
-    format!("CARTESIAN_POINT('',({}))", reals([p.x, p.y, p.z]))
+    let mut s = String::with_capacity(96);
+    s.push_str("CARTESIAN_POINT('',(");
+    for (k, x) in [p.x, p.y, p.z].into_iter().enumerate() {
+        if k > 0 {
+            s.push(',');
+        }
+        push_real(&mut s, x);
+    }
+    s.push_str("))");
+    s
 }
 
 /// `(multiplicities),(distinct knots)` of a knot vector.
@@ -344,18 +363,25 @@ fn step_string_literal(s: &str) -> String {
 /// file friendly to line-oriented tools and older readers.
 fn wrap_into(out: &mut String, line: &str) {
     const WIDTH: usize = 76;
+    // Byte-wise (every break follows an ASCII comma, so slices stay on char boundaries);
+    // columns count chars, i.e. bytes that do not continue a UTF-8 sequence.
     let mut col = 0;
     let mut in_str = false;
-    for ch in line.chars() {
-        out.push(ch);
-        col += 1;
-        if ch == '\'' {
+    let mut start = 0;
+    for (i, &b) in line.as_bytes().iter().enumerate() {
+        if b & 0xC0 != 0x80 {
+            col += 1;
+        }
+        if b == b'\'' {
             in_str = !in_str;
-        } else if ch == ',' && !in_str && col >= WIDTH {
+        } else if b == b',' && !in_str && col >= WIDTH {
+            out.push_str(&line[start..=i]);
             out.push_str("\n  ");
             col = 2;
+            start = i + 1;
         }
     }
+    out.push_str(&line[start..]);
     out.push('\n');
 }
 

@@ -34,5 +34,6 @@ pub mod poly;
 pub mod pou;
 pub mod project;
 pub mod rbf;
+pub mod tps_kernel;
 
 pub use pou::{FitOptions, FitStats, PouImplicit};

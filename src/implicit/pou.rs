@@ -196,6 +196,9 @@ pub struct PouImplicit {
     diagonal: f64,
     /// Typical point spacing (see `sample_spacing`).
     spacing: f64,
+    /// Per octree node (indexed by node; only terminal nodes filled), the `DENSE_PROBE` points
+    /// nearest to the cell's centre (`u32::MAX` when none): `dense`'s first try.
+    probes: Vec<[u32; DENSE_PROBE]>,
     stats: FitStats,
 }
 
@@ -214,6 +217,16 @@ const DENSITY_RADIUS: f64 = 3.0;
 /// sampling about 1.5 spacings from the surface (7.07 (1 - d^2 / 9)^4 = 2 at d = 1.56).
 const DENSITY_FULL: f64 = 2.0;
 
+/// Points summed by `PouImplicit::dense` before the full density: the nearest ones to x, or
+/// to the centre of the octree cell holding x (near the surface three or four of them already
+/// reach `DENSITY_FULL`).
+const DENSE_PROBE: usize = 8;
+
+/// `PouImplicit::dense` answers yes only when its partial sum beats `DENSITY_FULL` by this
+/// relative margin, far above rounding, so the exact sum certainly reaches it too and `blend`
+/// gives bit-identical results whichever way it was decided.
+const DENSE_MARGIN: f64 = 1.0 + 1e-9;
+
 /// Support of an extrapolating cell relative to a fitted cell's.
 const EXTRAPOLATION_SPREAD: f64 = 1.5;
 
@@ -224,6 +237,30 @@ const BRIDGE_POINTS: usize = 8;
 /// A domain too small to split keeps a polynomial whose residual is within this many times the
 /// tolerance (the misfit is noise there).
 const LEAF_FACTOR: f64 = 1.5;
+
+/// The `DENSE_PROBE` points nearest to the centre of each terminal octree cell not much larger
+/// than the density radius `r` (larger cells get none: from most of such a cell the points
+/// nearest its centre are too far to count), for `PouImplicit::dense`.
+fn density_probes<T: Send>(tree: &Octree<T>, kd: &KdTree, r: f64) -> Vec<[u32; DENSE_PROBE]> {
+    use rayon::prelude::*;
+    let cells: Vec<(usize, Cube)> = tree.terminal_nodes().collect();
+    let found: Vec<(usize, [u32; DENSE_PROBE])> = cells
+        .par_iter()
+        .filter(|(_, cube)| cube.size <= r)
+        .map(|(ni, cube)| {
+            let mut probe = [u32::MAX; DENSE_PROBE];
+            for (slot, (i, _)) in probe.iter_mut().zip(kd.knn(&cube.center(), DENSE_PROBE)) {
+                *slot = i as u32;
+            }
+            (*ni, probe)
+        })
+        .collect();
+    let mut probes = vec![[u32::MAX; DENSE_PROBE]; tree.node_count()];
+    for (ni, probe) in found {
+        probes[ni] = probe;
+    }
+    probes
+}
 
 /// Median over up to 2000 strided points of the distance to the 8th nearest neighbour divided by
 /// sqrt(8 / pi): the spacing of an even sampling with the same density.
@@ -374,6 +411,7 @@ impl PouImplicit {
             support_sum += cell.support_points as usize;
         }
         stats.mean_support_points = support_sum as f64 / stats.cells.max(1) as f64;
+        let probes = density_probes(&tree, &kd, DENSITY_RADIUS * spacing);
         Ok(PouImplicit {
             tree,
             points: pts,
@@ -381,6 +419,7 @@ impl PouImplicit {
             kd,
             diagonal,
             spacing,
+            probes,
             stats,
         })
     }
@@ -472,6 +511,43 @@ impl PouImplicit {
         (rho, g)
     }
 
+    /// True when the data density at `x` certainly reaches `DENSITY_FULL`: a partial sum of
+    /// rho over a few points already does (every term is non-negative), with `DENSE_MARGIN`.
+    /// Then the density ramp of `blend` is 0 with zero slope and the full sum, a radius query,
+    /// is not needed. The points tried first are the probes of the octree cell holding x
+    /// (`node`; no query at all), then the `DENSE_PROBE` nearest to x; near the surface, where
+    /// `fit` evaluates, one of them nearly always decides.
+    fn dense(&self, x: &Point3<f64>, node: Option<usize>) -> bool {
+        let r = DENSITY_RADIUS * self.spacing;
+        let r2 = r * r;
+        let term = |i: usize| {
+            let u = 1.0 - (x - self.points[i]).norm_squared() / r2;
+            if u > 0.0 {
+                u * u * u
+            } else {
+                0.0
+            }
+        };
+        let full = DENSITY_FULL * DENSE_MARGIN;
+        if let Some(probe) = node.and_then(|n| self.probes.get(n)) {
+            let rho: f64 = probe
+                .iter()
+                .filter(|&&i| i != u32::MAX)
+                .map(|&i| term(i as usize))
+                .sum();
+            if rho >= full {
+                return true;
+            }
+        }
+        let rho: f64 = self
+            .kd
+            .knn(x, DENSE_PROBE)
+            .into_iter()
+            .map(|(i, _)| term(i))
+            .sum();
+        rho >= full
+    }
+
     /// F(x) and, when `with_gradient`, grad F(x) (seed 003 eq. 8 and its derivative).
     ///
     /// The three families of cells are blended in one quotient with priorities:
@@ -506,7 +582,7 @@ impl PouImplicit {
         }
         let mut acc = [Acc::default(), Acc::default(), Acc::default()];
         let cells = self.tree.payloads();
-        self.tree.for_each_support(x, |l| {
+        let node = self.tree.for_each_support(x, |l| {
             let c = &cells[l];
             let t = (x - c.center).component_div(&c.half);
             let q = Vector3::new(1.0 - t.x * t.x, 1.0 - t.y * t.y, 1.0 - t.z * t.z);
@@ -568,16 +644,24 @@ impl PouImplicit {
         let (pc, dpc) = ramp(fit.c);
         let (p, gp) = if br.s <= 0.0 || pc >= 1.0 {
             (pc, fit.gc * dpc)
+        } else if self.dense(x, node) {
+            // R(rho / rho_0) = 0 with zero slope: p = 1 - (1 - pc) = pc.
+            (pc, fit.gc * dpc)
         } else {
             let (rho, grho) = self.density(x, with_gradient);
-            let (pd, dpd) = ramp(rho / DENSITY_FULL);
-            let p = 1.0 - (1.0 - pc) * (1.0 - pd);
-            let gp = if with_gradient {
-                fit.gc * (dpc * (1.0 - pd)) + grho * (dpd / DENSITY_FULL * (1.0 - pc))
+            if rho >= DENSITY_FULL {
+                // As just above, so that the result does not depend on how it was decided.
+                (pc, fit.gc * dpc)
             } else {
-                Vector3::zeros()
-            };
-            (p, gp)
+                let (pd, dpd) = ramp(rho / DENSITY_FULL);
+                let p = 1.0 - (1.0 - pc) * (1.0 - pd);
+                let gp = if with_gradient {
+                    fit.gc * (dpc * (1.0 - pd)) + grho * (dpd / DENSITY_FULL * (1.0 - pc))
+                } else {
+                    Vector3::zeros()
+                };
+                (p, gp)
+            }
         };
         // Priority of the fallback cells: where neither fitted cells nor bridges cover x.
         let (q, dq) = ramp(fit.c + br.c);

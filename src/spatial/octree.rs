@@ -8,7 +8,12 @@
 //!
 //! Queries return the leaves whose support contains a point without scanning all leaves: every
 //! node stores the bounding box of the supports in its subtree (its *reach*), and a query only
-//! descends into nodes whose reach contains the point.
+//! descends into nodes whose reach contains the point. Every terminal node (one without
+//! children) also keeps the list of leaves whose support meets its cube, in that traversal's
+//! order: a query inside the root cube walks down to the terminal node holding the point (one
+//! child per level) and tests only that list, with the same leaves in the same order as the
+//! full traversal (so sums over them round identically), several times faster where supports
+//! overlap widely.
 //!
 //! Construction is level by level; the cells of one level are decided in parallel (rayon) and
 //! collected in order, so the tree is the same for any thread count.
@@ -118,6 +123,16 @@ pub struct Octree<T> {
     supports: Vec<Aabb>,
     leaf_cubes: Vec<Cube>,
     leaf_depths: Vec<u32>,
+    /// Per node, the range in `candidates` of the leaves whose support meets the node's cube
+    /// (empty for inner nodes): `candidates[candidate_start[n]..candidate_start[n + 1]]`.
+    candidate_start: Vec<u32>,
+    candidates: Vec<u32>,
+}
+
+/// Closed intersection of a support box and a cube.
+fn box_meets_cube(b: &Aabb, c: &Cube) -> bool {
+    let m = c.max();
+    (0..3).all(|k| b.min[k] <= m[k] && b.max[k] >= c.min[k])
 }
 
 fn empty_box() -> Aabb {
@@ -129,6 +144,38 @@ fn empty_box() -> Aabb {
 
 fn box_contains(b: &Aabb, p: &Point3<f64>) -> bool {
     (0..3).all(|k| p[k] >= b.min[k] && p[k] <= b.max[k])
+}
+
+/// Depth-first walk over the nodes whose reach passes `hit`, calling `f` for each leaf whose
+/// support passes it; children in order 0..8 after their parent.
+#[inline]
+fn traverse<H: Fn(&Aabb) -> bool, F: FnMut(usize)>(
+    nodes: &[Node],
+    supports: &[Aabb],
+    hit: H,
+    mut f: F,
+) {
+    let mut stack = [0u32; 256];
+    let mut top = 1usize;
+    stack[0] = 0;
+    while top > 0 {
+        top -= 1;
+        let n = &nodes[stack[top] as usize];
+        if !hit(&n.reach) {
+            continue;
+        }
+        if n.leaf != u32::MAX && hit(&supports[n.leaf as usize]) {
+            f(n.leaf as usize);
+        }
+        if n.first_child != 0 {
+            for c in (n.first_child..n.first_child + 8).rev() {
+                if top < stack.len() {
+                    stack[top] = c;
+                    top += 1;
+                }
+            }
+        }
+    }
 }
 
 impl<T: Send> Octree<T> {
@@ -219,39 +266,86 @@ impl<T: Send> Octree<T> {
             }
             nodes[ni].reach = r;
         }
-        Octree {
+        let mut tree = Octree {
             nodes,
             payloads,
             supports,
             leaf_cubes,
             leaf_depths,
+            candidate_start: Vec::new(),
+            candidates: Vec::new(),
+        };
+        tree.index_candidates();
+        tree
+    }
+
+    /// Fills `candidate_start` / `candidates` (module doc): for each terminal node, the leaves
+    /// whose support meets its cube, found by the traversal of `for_each_support` with the
+    /// point test replaced by a cube test (so in the order that traversal visits them).
+    fn index_candidates(&mut self) {
+        let (nodes, supports) = (&self.nodes, &self.supports);
+        let lists: Vec<Vec<u32>> = (0..nodes.len())
+            .into_par_iter()
+            .map(|ni| {
+                let n = &nodes[ni];
+                if n.first_child != 0 {
+                    return Vec::new();
+                }
+                let cube = n.cube;
+                let mut out = Vec::new();
+                traverse(
+                    nodes,
+                    supports,
+                    |b| box_meets_cube(b, &cube),
+                    |l| out.push(l as u32),
+                );
+                out
+            })
+            .collect();
+        let mut start = Vec::with_capacity(lists.len() + 1);
+        let mut all = Vec::with_capacity(lists.iter().map(Vec::len).sum());
+        for l in lists {
+            start.push(all.len() as u32);
+            all.extend(l);
         }
+        start.push(all.len() as u32);
+        self.candidate_start = start;
+        self.candidates = all;
     }
 
     /// Calls `f(leaf index)` for every leaf whose support box contains `x`, in a fixed order.
+    /// Returns the terminal node whose cube holds `x` (see [`Octree::terminal_nodes`]), or
+    /// None outside the root cube.
     #[inline]
-    pub fn for_each_support<F: FnMut(usize)>(&self, x: &Point3<f64>, mut f: F) {
-        let mut stack = [0u32; 256];
-        let mut top = 1usize;
-        stack[0] = 0;
-        while top > 0 {
-            top -= 1;
-            let n = &self.nodes[stack[top] as usize];
-            if !box_contains(&n.reach, x) {
-                continue;
-            }
-            if n.leaf != u32::MAX && box_contains(&self.supports[n.leaf as usize], x) {
-                f(n.leaf as usize);
-            }
-            if n.first_child != 0 {
-                for c in (n.first_child..n.first_child + 8).rev() {
-                    if top < stack.len() {
-                        stack[top] = c;
-                        top += 1;
-                    }
-                }
+    pub fn for_each_support<F: FnMut(usize)>(&self, x: &Point3<f64>, mut f: F) -> Option<usize> {
+        let mut n = &self.nodes[0];
+        if !n.cube.contains(x) {
+            // Outside the root cube (within a support's overlap beyond it): full traversal.
+            traverse(&self.nodes, &self.supports, |b| box_contains(b, x), f);
+            return None;
+        }
+        let mut ni = 0usize;
+        while n.first_child != 0 {
+            ni = n.first_child as usize + n.cube.child_of(x);
+            n = &self.nodes[ni];
+        }
+        let (a, b) = (self.candidate_start[ni], self.candidate_start[ni + 1]);
+        for &l in &self.candidates[a as usize..b as usize] {
+            if box_contains(&self.supports[l as usize], x) {
+                f(l as usize);
             }
         }
+        Some(ni)
+    }
+
+    /// The nodes without children (leaves, and cells left without a payload) as (node index,
+    /// cube): they tile the root cube. Node indices run below [`Octree::node_count`].
+    pub fn terminal_nodes(&self) -> impl Iterator<Item = (usize, Cube)> + '_ {
+        self.nodes
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| n.first_child == 0)
+            .map(|(i, n)| (i, n.cube))
     }
 
     /// The leaf whose cell contains `x`, if any.
