@@ -56,6 +56,17 @@ impl Centres {
         }
     }
 
+    /// The centres [`LANES`] at a time: x, y, z and lambda blocks.
+    #[inline(always)]
+    fn blocks(&self) -> impl Iterator<Item = (&[f64], &[f64], &[f64], &[f64])> {
+        self.x
+            .chunks_exact(LANES)
+            .zip(self.y.chunks_exact(LANES))
+            .zip(self.z.chunks_exact(LANES))
+            .zip(self.lambda.chunks_exact(LANES))
+            .map(|(((x, y), z), l)| (x, y, z, l))
+    }
+
     /// Number of (unpadded) centres.
     pub fn len(&self) -> usize {
         self.len
@@ -142,12 +153,7 @@ fn reduce(s: [f64; LANES]) -> f64 {
 #[inline(always)]
 fn value_lanes(c: &Centres, y: [f64; 3]) -> f64 {
     let mut s = [0.0; LANES];
-    for (((cx, cy), cz), l) in
-        c.x.chunks_exact(LANES)
-            .zip(c.y.chunks_exact(LANES))
-            .zip(c.z.chunks_exact(LANES))
-            .zip(c.lambda.chunks_exact(LANES))
-    {
+    for (cx, cy, cz, l) in c.blocks() {
         for k in 0..LANES {
             let r2 = r2_of(y[0] - cx[k], y[1] - cy[k], y[2] - cz[k]);
             s[k] += l[k] * (0.5 * r2 * ln(r2));
@@ -162,12 +168,7 @@ fn value_and_gradient_lanes(c: &Centres, y: [f64; 3]) -> (f64, [f64; 3]) {
     let mut gx = [0.0; LANES];
     let mut gy = [0.0; LANES];
     let mut gz = [0.0; LANES];
-    for (((cx, cy), cz), l) in
-        c.x.chunks_exact(LANES)
-            .zip(c.y.chunks_exact(LANES))
-            .zip(c.z.chunks_exact(LANES))
-            .zip(c.lambda.chunks_exact(LANES))
-    {
+    for (cx, cy, cz, l) in c.blocks() {
         for k in 0..LANES {
             let (dx, dy, dz) = (y[0] - cx[k], y[1] - cy[k], y[2] - cz[k]);
             let r2 = r2_of(dx, dy, dz);
