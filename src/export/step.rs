@@ -271,26 +271,26 @@ fn refs(ids: &[usize]) -> String {
     s
 }
 
-fn reals(xs: impl IntoIterator<Item = f64>) -> String {
-    let mut s = String::new();
+/// Appends the reals `xs` separated by commas.
+fn push_reals(out: &mut String, xs: impl IntoIterator<Item = f64>) {
     for (k, x) in xs.into_iter().enumerate() {
         if k > 0 {
-            s.push(',');
+            out.push(',');
         }
-        push_real(&mut s, x);
+        push_real(out, x);
     }
+}
+
+fn reals(xs: impl IntoIterator<Item = f64>) -> String {
+    let mut s = String::new();
+    push_reals(&mut s, xs);
     s
 }
 
 fn cartesian_point(p: &Point3<f64>) -> String {
     let mut s = String::with_capacity(96);
     s.push_str("CARTESIAN_POINT('',(");
-    for (k, x) in [p.x, p.y, p.z].into_iter().enumerate() {
-        if k > 0 {
-            s.push(',');
-        }
-        push_real(&mut s, x);
-    }
+    push_reals(&mut s, [p.x, p.y, p.z]);
     s.push_str("))");
     s
 }

@@ -238,6 +238,14 @@ const BRIDGE_POINTS: usize = 8;
 /// tolerance (the misfit is noise there).
 const LEAF_FACTOR: f64 = 1.5;
 
+/// Base u = max(0, 1 - d^2 / R^2) of one point's term u^3 in the data density (`d^2` its squared
+/// distance, `r2` = R^2): one formula for `PouImplicit::density` and the partial sums of
+/// `PouImplicit::dense`, which must bound the same sum from below.
+#[inline]
+fn density_base(d2: f64, r2: f64) -> f64 {
+    (1.0 - d2 / r2).max(0.0)
+}
+
 /// The `DENSE_PROBE` points nearest to the centre of each terminal octree cell not much larger
 /// than the density radius `r` (larger cells get none: from most of such a cell the points
 /// nearest its centre are too far to count), for `PouImplicit::dense`.
@@ -500,7 +508,7 @@ impl PouImplicit {
         let mut g = Vector3::zeros();
         for i in self.kd.within(x, r) {
             let v = x - self.points[i];
-            let u = 1.0 - v.norm_squared() / r2;
+            let u = density_base(v.norm_squared(), r2);
             if u > 0.0 {
                 rho += u * u * u;
                 if with_gradient {
@@ -521,12 +529,8 @@ impl PouImplicit {
         let r = DENSITY_RADIUS * self.spacing;
         let r2 = r * r;
         let term = |i: usize| {
-            let u = 1.0 - (x - self.points[i]).norm_squared() / r2;
-            if u > 0.0 {
-                u * u * u
-            } else {
-                0.0
-            }
+            let u = density_base((x - self.points[i]).norm_squared(), r2);
+            u * u * u
         };
         let full = DENSITY_FULL * DENSE_MARGIN;
         if let Some(probe) = node.and_then(|n| self.probes.get(n)) {
