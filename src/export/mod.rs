@@ -282,18 +282,15 @@ pub fn fmt_real(x: f64) -> String {
 /// Appends [`fmt_real`]`(x)` to `out` without allocating (the writers format about a million
 /// reals for a 1,500-patch network).
 pub fn push_real(out: &mut String, x: f64) {
-    use std::io::Write as _;
     if x == 0.0 {
         out.push_str("0.");
         return;
     }
-    // Rust's Debug form is the shortest round-trip representation ("1.0", "0.1", "1e-7"); at
-    // most 24 bytes ("-1.2345678901234567e-308").
-    let mut buf = [0u8; 40];
-    let mut cur = std::io::Cursor::new(&mut buf[..]);
-    let _ = write!(cur, "{x:?}");
-    let n = cur.position() as usize;
-    let s = std::str::from_utf8(&buf[..n]).unwrap_or("0.");
+    // ryu gives the shortest representation that reads back as x ("1.0", "0.1", "1e-7",
+    // "1.5e20"), several times faster than core's formatting (2 million reals in the bunny's
+    // STEP file).
+    let mut buf = ryu::Buffer::new();
+    let s = buf.format(x);
     let (mant, exp) = match s.split_once('e') {
         Some((m, e)) => (m, Some(e)),
         None => (s, None),

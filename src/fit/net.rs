@@ -88,15 +88,16 @@ fn crossing_edges<I: Implicit + ?Sized>(f: &I, net: &QuadNet) -> usize {
 /// Builds, projects and smooths the quad net of f = 0 near `seeds` (points on or near the
 /// surface, e.g. the input cloud; at least one per surface component) within `bounds`.
 /// `score_net` measures a candidate net as patches (`None`: not measured) to rank the grid
-/// placements.
+/// placements, and may return what it built (`P`, e.g. the trial sampling): the kept
+/// placement's is returned with its net, for the caller to go on from.
 /// Errors: an invalid size, no seed near the surface, and the failures of the stages.
-pub fn fit_net<I: Implicit + ?Sized>(
+pub fn fit_net<I: Implicit + ?Sized, P>(
     f: &I,
     seeds: &[Point3<f64>],
     bounds: &Aabb,
     size: PatchSize,
-    score_net: &(dyn Fn(&QuadNet) -> Option<TrialScore> + Sync),
-) -> Result<(QuadNet, NetReport)> {
+    score_net: &(dyn Fn(&QuadNet) -> Option<(TrialScore, P)> + Sync),
+) -> Result<(QuadNet, NetReport, Option<P>)> {
     let scale = bounds.diagonal();
     if !(scale.is_finite() && scale > 0.0) {
         return Err(Error::Degenerate(
@@ -140,7 +141,7 @@ pub fn fit_net<I: Implicit + ?Sized>(
     let mut first_error: Option<Error> = None;
     // (folds, trial jumps, crossing edges), compared in that order.
     type Score = (usize, usize, usize);
-    let mut best: Option<(Score, QuadNet, SmoothReport, VoxelNetStats)> = None;
+    let mut best: Option<(Score, QuadNet, SmoothReport, VoxelNetStats, Option<P>)> = None;
     for (k, frac) in [0.0, 1.0 / 3.0, 2.0 / 3.0].into_iter().enumerate() {
         let (mut net, stats) = if k == 0 {
             (voxel_net.net.clone(), voxel_net.stats.clone())
@@ -173,7 +174,10 @@ pub fn fit_net<I: Implicit + ?Sized>(
         let crossing = crossing_edges(f, &net);
         // Folds first; then the trial patches' large jumps (when the caller measures them),
         // then edges crossing a thin sheet.
-        let trial = if folds == 0 { score_net(&net) } else { None };
+        let (trial, kept) = match if folds == 0 { score_net(&net) } else { None } {
+            Some((t, k)) => (Some(t), Some(k)),
+            None => (None, None),
+        };
         let score = (folds, trial.map_or(0, |t| t.samples_over_5_deg), crossing);
         candidates.push(PlacementTry {
             shift: frac,
@@ -183,10 +187,10 @@ pub fn fit_net<I: Implicit + ?Sized>(
             trial,
         });
         if best.as_ref().is_none_or(|b| score < b.0) {
-            best = Some((score, net, smoothing, stats));
+            best = Some((score, net, smoothing, stats, kept));
         }
     }
-    let Some((_, net, smoothing, voxel_stats)) = best else {
+    let Some((_, net, smoothing, voxel_stats, kept)) = best else {
         let why = first_error.map_or_else(String::new, |e| format!(" ({e})"));
         return Err(Error::Numerical(format!(
             "the quad net could not be projected onto the implicit surface{why}: parts of the \
@@ -209,7 +213,7 @@ pub fn fit_net<I: Implicit + ?Sized>(
         patch_count,
         smoothing,
     };
-    Ok((net, report))
+    Ok((net, report, kept))
 }
 
 #[cfg(test)]
@@ -225,17 +229,18 @@ mod tests {
         };
         let b = aabb([-1.3, -1.3, -0.3], [1.3, 1.3, 0.3]);
         let seeds = seeds_on(&t, Point3::origin(), 1.4, 60);
-        let (net, r) = fit_net(&t, &seeds, &b, PatchSize::Count(600), &|_| None).unwrap();
+        let none = |_: &QuadNet| None::<(TrialScore, ())>;
+        let (net, r, _) = fit_net(&t, &seeds, &b, PatchSize::Count(600), &none).unwrap();
         assert!((net.quads.len() as f64 - 600.0).abs() <= 90.0);
         assert_eq!(r.euler_characteristic, 0);
         assert_eq!(r.smoothing.smoothed.flipped, 0);
         let json = serde_json::to_string(&r).unwrap();
         assert!(json.contains("\"min_angle_deg\""));
-        let (net2, r2) = fit_net(&t, &seeds, &b, PatchSize::Edge(r.h), &|_| None).unwrap();
+        let (net2, r2, _) = fit_net(&t, &seeds, &b, PatchSize::Edge(r.h), &none).unwrap();
         assert_eq!(net2, net);
         assert!(r2.patch_count.is_none());
-        assert!(fit_net(&t, &seeds, &b, PatchSize::Edge(-1.0), &|_| None).is_err());
-        assert!(fit_net(&t, &seeds, &b, PatchSize::Count(0), &|_| None).is_err());
+        assert!(fit_net(&t, &seeds, &b, PatchSize::Edge(-1.0), &none).is_err());
+        assert!(fit_net(&t, &seeds, &b, PatchSize::Count(0), &none).is_err());
     }
 
     /// The whole net + samples pipeline on the Stanford bunny, with an IMLS implicit standing in
@@ -288,8 +293,9 @@ mod tests {
         for target in [1500, 3642] {
             f.1.store(0, Ordering::Relaxed);
             let t1 = Instant::now();
-            let (net, r) =
-                fit_net(&f, &mesh.positions, &b, PatchSize::Count(target), &|_| None).unwrap();
+            let none = |_: &QuadNet| None::<(TrialScore, ())>;
+            let (net, r, _) =
+                fit_net(&f, &mesh.positions, &b, PatchSize::Count(target), &none).unwrap();
             let net_evals = f.1.load(Ordering::Relaxed);
             let t_net = t1.elapsed();
             eprintln!(

@@ -6,7 +6,9 @@
 
 use super::cross_tangents::{align_cross_derivatives, corner_twists, BoundarySplines};
 use super::net::{fit_net, NetReport, PatchSize, TrialScore};
-use super::samples::{sample_patches, PatchSampling, SampleOptions, SampleReport};
+use super::samples::{
+    sample_patches, sample_patches_from, PatchSampling, SampleOptions, SampleReport,
+};
 use super::vertex_twists::{corners_of, solve_vertex_twists, Corner};
 use crate::implicit::pou::{FitOptions as ImplicitOptions, FitStats, PouImplicit};
 use crate::implicit::Implicit;
@@ -165,19 +167,23 @@ pub fn fit_measured(
     progress("quad net", 0.3);
     let t = Instant::now();
     // Each grid placement's net is tried as patches: TRIAL_INTERVALS samples per side, no
-    // refinement (a tenth of the real sampling's cost), its jumps over 5 degrees counted.
+    // refinement, its jumps over 5 degrees counted. The kept placement's trial sampling is the
+    // first round of the real sampling.
     let tol = opts.tolerance * diag;
-    let trial = |net: &QuadNet| -> Option<TrialScore> {
+    let trial = |net: &QuadNet| -> Option<(TrialScore, PatchSampling)> {
         let mut o = SampleOptions::new(tol, diag);
         (o.min_intervals, o.max_intervals, o.max_rounds) = (TRIAL_INTERVALS, TRIAL_INTERVALS, 1);
+        // Only the kept placement's patches are measured, when the sampling starts from them.
+        o.measure = false;
         let sampling = sample_patches(net, &f, &o).ok()?;
         let network = patch_network(&f, net, &sampling).ok()?;
         let c = normal_jumps(&network, opts.jump_samples);
-        Some(TrialScore {
+        let score = TrialScore {
             samples_over_5_deg: c.samples_over_5_deg,
-        })
+        };
+        Some((score, sampling))
     };
-    let (net, net_report) = fit_net(&f, &op.points, &bounds, opts.size, &trial)?;
+    let (net, net_report, trial_sampling) = fit_net(&f, &op.points, &bounds, opts.size, &trial)?;
     timings.net = t.elapsed().as_secs_f64();
 
     progress("sampling", 0.5);
@@ -189,7 +195,7 @@ pub fn fit_measured(
     {
         sample_opts.max_intervals = APRON_MAX_INTERVALS;
     }
-    let sampling = sample_patches(&net, &f, &sample_opts)?;
+    let sampling = sample_patches_from(&net, &f, &sample_opts, trial_sampling)?;
     timings.sampling = t.elapsed().as_secs_f64();
     let data = KdTree::build(&op.points)?;
     let grids: Vec<&Vec<Vec<nalgebra::Point3<f64>>>> =
@@ -214,11 +220,12 @@ pub fn fit_measured(
         .iter()
         .map(|p| SampleGrid {
             points: &p.points,
+            normals: &p.normals,
             params_u: &p.params_u,
             params_v: &p.params_v,
         })
         .collect();
-    let folds = folds(&f, &network, &sample_grids);
+    let folds = folds(&network, &sample_grids);
     timings.continuity = t.elapsed().as_secs_f64();
     timings.total = t_all.elapsed().as_secs_f64();
 

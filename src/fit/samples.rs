@@ -13,13 +13,17 @@
 //! quad estimate the deviation of its row splines (u) and column splines (v) from f = 0 at the
 //! interval midpoints ([`super::spline_check`]; these splines are the patch's iso-curves through
 //! the sample rows) and at the cell centres (an estimate); where it exceeds the tolerance, raise the
-//! ribbon's count to S (dev / tol)^(1/4) x 1.1 (the error of cubic interpolation falls like the
-//! fourth power of the spacing), rebuild the patches touching changed ribbons, and repeat; a
+//! ribbon's count to 1.2 S (dev / tol)^(1/2) (see [`CONVERGENCE_ORDER`]: on scan implicits the
+//! estimate falls like the square of the spacing at these counts, not yet like the fourth power
+//! cubic interpolation reaches asymptotically), rebuild the patches touching changed ribbons,
+//! and repeat; a
 //! quad whose deviation fell by less than r^2 once its count rose by r >= 2 (r^4 is expected)
 //! is "stalled" and stops driving
 //! refinement (otherwise one unresolvable patch would push its whole ribbon to the cap). A
 //! ribbon takes the largest count any of its quads needs, so one curved spot densifies its whole
-//! strip: the price of a tensor-product network without T-junctions.
+//! strip: the price of a tensor-product network without T-junctions. The first round may be
+//! given ([`sample_patches_from`]: `fit` passes the trial sampling that ranked the grid
+//! placements), so refinement starts from it instead of from `min_intervals`.
 //!
 //! **Parameters.** Uniform, k / S, snapped to multiples of 2^-40 (exactly symmetric under
 //! t -> 1 - t, and the grid the nurbs module's `Params` uses), identical for every patch of a
@@ -87,6 +91,12 @@ pub struct SampleOptions {
     /// (default 20): sides whose normals turn faster are refined, for continuity rather than
     /// position.
     pub max_turn_deg: f64,
+    /// Measure every patch's deviation (default true): the refinement's input, and half the
+    /// cost of a sampling at four intervals. Without it (trial patches that are only looked
+    /// at as patches) there is one round and the patches are left unmeasured
+    /// ([`PatchSamples::measured`]); [`sample_patches_from`] measures them when it starts from
+    /// them.
+    pub measure: bool,
 }
 
 impl SampleOptions {
@@ -98,6 +108,7 @@ impl SampleOptions {
             max_intervals: 16,
             max_rounds: 6,
             max_turn_deg: 20.0,
+            measure: true,
         }
     }
 }
@@ -123,6 +134,9 @@ pub struct PatchSamples {
     pub sides: [PatchSide; 4],
     /// points[i][j] at (params_u[i], params_v[j]), S + 1 by T + 1, all on f = 0.
     pub points: Vec<Vec<Point3<f64>>>,
+    /// The implicit's unit normal at each point (as the root finders left it; zero where the
+    /// gradient vanishes), for the fold measure (`quality::folds`).
+    pub normals: Vec<Vec<Vector3<f64>>>,
     pub params_u: Vec<f64>,
     pub params_v: Vec<f64>,
     /// d/du on the column u = 0 and u = 1 (T + 1 each).
@@ -144,6 +158,9 @@ pub struct PatchSamples {
     /// Largest |f| / |grad f| over the samples (about 1e-12 of the model size; larger where
     /// the implicit jumps across zero and a sample sits on the jump).
     pub max_residual: f64,
+    /// Whether the three deviations and `max_residual` were measured (else they are 0; see
+    /// [`SampleOptions::measure`]).
+    pub measured: bool,
 }
 
 impl PatchSamples {
@@ -226,12 +243,40 @@ pub fn uniform_params(n: usize) -> Vec<f64> {
         .collect()
 }
 
+/// Order of convergence the refinement assumes: a side whose deviation estimate is `dev` at
+/// S intervals gets S (dev / tol)^(1 / CONVERGENCE_ORDER). Cubic interpolation converges with
+/// order 4 asymptotically, but on the bunny's implicit the per-quad estimates fell with a
+/// median order of 1.1 (from 2 to about 5 intervals), 1.7 (to about 10) and 2.1 (to 12)
+/// between rounds: the implicit's curvature varies at the scale of the samples. Predicting
+/// with 4 needed five rounds, most of them rebuilding every patch; with 2, three (the first
+/// given), for 9 % more grid points and 1 s less on the bunny (docs/BENCHMARKS.md, session 9).
+/// The prediction carries a [`MARGIN`].
+pub const CONVERGENCE_ORDER: f64 = 2.0;
+
+/// Factor on the predicted count: the order is a median, and without a margin a third of the
+/// patches missed the tolerance by a little and took their ribbons through one more round
+/// (bunny: 1.2 gives 2 % more grid points and 0.2 s less sampling than 1.0).
+pub const MARGIN: f64 = 1.2;
+
 /// Samples every quad of `net` (nodes on f = 0, e.g. after `net_smooth`). Errors: invalid
 /// options, and edge or interior points where the implicit cannot be solved.
 pub fn sample_patches<I: Implicit + ?Sized>(
     net: &QuadNet,
     f: &I,
     opt: &SampleOptions,
+) -> Result<PatchSampling> {
+    sample_patches_from(net, f, opt, None)
+}
+
+/// [`sample_patches`] with its first round given: `start`, a sampling of the same `net` (by
+/// [`sample_patches`] with any options; `fit` passes the trial patches that ranked the grid
+/// placements), counts as round 1 and refinement goes on from its counts. A `start` of
+/// another net, or with counts outside `opt`'s range, is ignored (sampled from scratch).
+pub fn sample_patches_from<I: Implicit + ?Sized>(
+    net: &QuadNet,
+    f: &I,
+    opt: &SampleOptions,
+    start: Option<PatchSampling>,
 ) -> Result<PatchSampling> {
     if !(opt.tolerance > 0.0 && opt.scale > 0.0)
         || opt.min_intervals < 1
@@ -243,28 +288,58 @@ pub fn sample_patches<I: Implicit + ?Sized>(
         )));
     }
     let rib = ribbons(net);
-    let mut intervals = vec![opt.min_intervals; rib.count];
-    let mut edges: Vec<Option<EdgeSamples>> = vec![None; net.edges.len()];
-    let mut patches: Vec<Option<PatchSamples>> = vec![None; net.quads.len()];
-    let mut changed = vec![true; rib.count];
+    let start = start.filter(|s| {
+        s.ribbons == rib
+            && s.patches.len() == net.quads.len()
+            && s.edges.len() == net.edges.len()
+            && s.intervals.len() == rib.count
+            && s.intervals
+                .iter()
+                .all(|n| (opt.min_intervals..=opt.max_intervals).contains(n))
+    });
+    let (mut intervals, mut edges, mut patches, mut changed): (Vec<usize>, Vec<_>, Vec<_>, _) =
+        match start {
+            Some(mut s) => {
+                if opt.measure {
+                    s.patches
+                        .par_iter_mut()
+                        .filter(|p| !p.measured)
+                        .for_each(|p| measure(f, p));
+                }
+                (
+                    s.intervals,
+                    s.edges.into_iter().map(Some).collect(),
+                    s.patches.into_iter().map(Some).collect(),
+                    vec![false; rib.count],
+                )
+            }
+            None => (
+                vec![opt.min_intervals; rib.count],
+                vec![None; net.edges.len()],
+                vec![None; net.quads.len()],
+                vec![true; rib.count],
+            ),
+        };
     let mut rounds = 0;
     // Per quad and direction: the (count, deviation) of the first build, and whether the quad
     // stopped improving (it then no longer drives refinement).
     let mut first: Vec<[(usize, f64); 2]> = vec![[(0, f64::INFINITY); 2]; net.quads.len()];
     let mut stalled = vec![[false; 2]; net.quads.len()];
     loop {
-        rebuild(
-            net,
-            f,
-            &rib,
-            &intervals,
-            &changed,
-            &mut edges,
-            &mut patches,
-            opt,
-        )?;
+        if changed.contains(&true) {
+            rebuild(
+                net,
+                f,
+                &rib,
+                &intervals,
+                &changed,
+                &mut edges,
+                &mut patches,
+                opt,
+            )?;
+        }
         rounds += 1;
-        if rounds >= opt.max_rounds {
+        if rounds >= opt.max_rounds || !opt.measure {
             break;
         }
         // Raise the counts of ribbons whose quads miss the tolerance.
@@ -289,7 +364,9 @@ pub fn sample_patches<I: Implicit + ?Sized>(
                 }
                 if dev > opt.tolerance && !stalled[q][dir] {
                     let r = rib.of_quad[q][dir] as usize;
-                    let want = (n as f64 * (dev / opt.tolerance).powf(0.25) * 1.1).ceil() as usize;
+                    let want =
+                        (n as f64 * (dev / opt.tolerance).powf(1.0 / CONVERGENCE_ORDER) * MARGIN)
+                            .ceil() as usize;
                     need[r] = need[r].max(want.max(n + 1).min(opt.max_intervals));
                 }
             }
@@ -530,7 +607,14 @@ fn one_sided_derivative(p: [Vector3<f64>; 4], n: usize, h: f64) -> Vector3<f64> 
 }
 
 /// An interior row: its points, d/du at its two ends, and how many points are off the surface.
-type Row = (Vec<Point3<f64>>, Vector3<f64>, Vector3<f64>, usize);
+/// An interior row: points, normals, d/du at both ends, samples left off the surface.
+type Row = (
+    Vec<Point3<f64>>,
+    Vec<Vector3<f64>>,
+    Vector3<f64>,
+    Vector3<f64>,
+    usize,
+);
 
 /// The transfinite (Coons) patch of four boundary sample rows, for interior hints and the
 /// fallback: P = (1-v) B(u) + v T(u) + (1-u) L(v) + u R(v) - bilinear(corners).
@@ -616,7 +700,7 @@ impl Coons<'_> {
         let reach = 0.5 * self.reach();
         let newton = NewtonOptions::new(scale, reach);
         let mut missed = 0;
-        let row = (0..=s)
+        let row: Vec<Point3<f64>> = (0..=s)
             .map(|i| {
                 if i == 0 {
                     return self.left.p[j];
@@ -643,7 +727,15 @@ impl Coons<'_> {
         let common = (self.right.p[j] - self.left.p[j]) - ((cb - ca) * (1.0 - v) + (cc - cd) * v);
         let d0 = self.bot.d[0] * (1.0 - v) + self.top.d[0] * v + common;
         let d1 = self.bot.d[s] * (1.0 - v) + self.top.d[s] * v + common;
-        (row, d0, d1, missed)
+        let normals = row
+            .iter()
+            .map(|p| {
+                f.gradient(p)
+                    .try_normalize(0.0)
+                    .unwrap_or_else(Vector3::zeros)
+            })
+            .collect();
+        (row, normals, d0, d1, missed)
     }
 }
 
@@ -704,6 +796,13 @@ fn build_patch<I: Implicit + ?Sized>(
     }
     points[0].copy_from_slice(&left.p);
     points[s].copy_from_slice(&right.p);
+    let mut normals = vec![vec![Vector3::zeros(); t + 1]; s + 1];
+    for (i, col) in normals.iter_mut().enumerate() {
+        col[0] = bot.n[i];
+        col[t] = top.n[i];
+    }
+    normals[0].copy_from_slice(&left.n);
+    normals[s].copy_from_slice(&right.n);
     // d/du at the ends of every row: the boundary edges' tangents at the corners, the row
     // curves' own tangents in between.
     let mut tan_u0 = vec![Vector3::zeros(); t + 1];
@@ -729,16 +828,17 @@ fn build_patch<I: Implicit + ?Sized>(
             let w = blend + hint * (1.0 - blend.norm()).max(0.0);
             match sample_section(f, left.p[j], right.p[j], w, s, tol) {
                 Ok(row) if coons.row_near(&row.points, j, &pu, pv[j]) => {
-                    (row.points, row.tangents[0], row.tangents[s], 0)
+                    (row.points, row.normals, row.tangents[0], row.tangents[s], 0)
                 }
                 _ => coons.row_fallback(f, j, &pu, pv[j], tol, opt.scale),
             }
         })
         .collect();
     let mut unprojected = 0;
-    for (j, (row, d0, d1, missed)) in (1..t).zip(rows) {
+    for (j, (row, row_normals, d0, d1, missed)) in (1..t).zip(rows) {
         for i in 1..s {
             points[i][j] = row[i];
+            normals[i][j] = row_normals[i];
         }
         tan_u0[j] = tangent_part(d0, &left.n[j]);
         tan_u1[j] = tangent_part(d1, &right.n[j]);
@@ -777,6 +877,38 @@ fn build_patch<I: Implicit + ?Sized>(
     point_into_patch(&mut tan_v1, &top.d, &top.n, SideKind::V);
     point_into_patch(&mut tan_u0, &left.d, &left.n, SideKind::U);
     point_into_patch(&mut tan_u1, &right.d, &right.n, SideKind::U);
+    let mut p = PatchSamples {
+        quad: q,
+        corners: [a, b, c, d],
+        sides,
+        points,
+        normals,
+        params_u: pu,
+        params_v: pv,
+        tan_u0,
+        tan_u1,
+        tan_v0,
+        tan_v1,
+        deviation_u: 0.0,
+        deviation_v: 0.0,
+        deviation_cell: 0.0,
+        unprojected,
+        max_residual: 0.0,
+        measured: false,
+    };
+    if opt.measure {
+        measure(f, &mut p);
+    }
+    Ok(p)
+}
+
+/// Measures a patch's samples: the deviation from f = 0 of its row splines (u) and column
+/// splines (v) at their interval midpoints, the estimate at the cell centres, and the largest
+/// residual of the samples themselves.
+fn measure<I: Implicit + ?Sized>(f: &I, p: &mut PatchSamples) {
+    let (s, t) = (p.s(), p.t());
+    let (points, pu, pv) = (&p.points, &p.params_u, &p.params_v);
+    let (tan_u0, tan_u1, tan_v0, tan_v1) = (&p.tan_u0, &p.tan_u1, &p.tan_v0, &p.tan_v1);
     // Tolerance estimate along rows (u), columns (v) and at cell centres.
     let dist = |p: &Vector3<f64>| {
         let (val, g) = f.value_and_gradient(&Point3::from(*p));
@@ -791,7 +923,7 @@ fn build_patch<I: Implicit + ?Sized>(
     let row_mids: Vec<Vec<Vector3<f64>>> = (0..=t)
         .map(|j| {
             let row: Vec<Vector3<f64>> = (0..=s).map(|i| points[i][j].coords).collect();
-            spline_midpoints(&row, &pu, &tan_u0[j], &tan_u1[j])
+            spline_midpoints(&row, pu, &tan_u0[j], &tan_u1[j])
         })
         .collect();
     let deviation_u = row_mids.iter().map(|r| max_dist(r)).fold(0.0, f64::max);
@@ -802,7 +934,7 @@ fn build_patch<I: Implicit + ?Sized>(
     let deviation_v = (0..=s)
         .map(|i| {
             let col: Vec<Vector3<f64>> = points[i].iter().map(|p| p.coords).collect();
-            max_dist(&spline_midpoints(&col, &pv, &tan_v0[i], &tan_v1[i]))
+            max_dist(&spline_midpoints(&col, pv, &tan_v0[i], &tan_v1[i]))
         })
         .fold(0.0, f64::max);
     // Cell centres: the v-spline through the row midpoints of each column of cells, with end
@@ -821,31 +953,19 @@ fn build_patch<I: Implicit + ?Sized>(
         let sign = if from_end { -1.0 } else { 1.0 };
         sign * one_sided_derivative([at(0), at(1), at(2), at(3)], s, du)
     };
-    let v0_mid = spline_midpoints(&tan_v0, &pu, &twist(&tan_v0, false), &twist(&tan_v0, true));
-    let v1_mid = spline_midpoints(&tan_v1, &pu, &twist(&tan_v1, false), &twist(&tan_v1, true));
+    let v0_mid = spline_midpoints(tan_v0, pu, &twist(tan_v0, false), &twist(tan_v0, true));
+    let v1_mid = spline_midpoints(tan_v1, pu, &twist(tan_v1, false), &twist(tan_v1, true));
     let deviation_cell = (0..s)
         .map(|i| {
             let col: Vec<Vector3<f64>> = row_mids.iter().map(|r| r[i]).collect();
-            max_dist(&spline_midpoints(&col, &pv, &v0_mid[i], &v1_mid[i]))
+            max_dist(&spline_midpoints(&col, pv, &v0_mid[i], &v1_mid[i]))
         })
         .fold(0.0, f64::max);
-    Ok(PatchSamples {
-        quad: q,
-        corners: [a, b, c, d],
-        sides,
-        points,
-        params_u: pu,
-        params_v: pv,
-        tan_u0,
-        tan_u1,
-        tan_v0,
-        tan_v1,
-        deviation_u,
-        deviation_v,
-        deviation_cell,
-        unprojected,
-        max_residual,
-    })
+    p.deviation_u = deviation_u;
+    p.deviation_v = deviation_v;
+    p.deviation_cell = deviation_cell;
+    p.max_residual = max_residual;
+    p.measured = true;
 }
 
 #[cfg(test)]
@@ -993,6 +1113,47 @@ mod tests {
             ps.report.max_deviation,
             ps.report.over_tolerance,
             ps.report.grid_points
+        );
+    }
+
+    /// Starting from an unmeasured trial sampling gives exactly what sampling from scratch
+    /// with the trial's count as minimum gives; a start of another net is ignored.
+    #[test]
+    fn a_given_first_round_is_the_first_round() {
+        let t = Torus {
+            big: 1.0,
+            small: 0.35,
+        };
+        let b = aabb([-1.35, -1.35, -0.35], [1.35, 1.35, 0.35]);
+        let net = net_on(&t, &seeds_on(&t, Point3::origin(), 1.4, 40), &b, 0.15);
+        // Tighter than four intervals per side meet (about 1e-7 of the diagonal), so that
+        // refinement goes on from the start.
+        let tol = 2e-8 * b.diagonal();
+        let mut trial_opt = SampleOptions::new(tol, b.diagonal());
+        (trial_opt.min_intervals, trial_opt.max_intervals) = (4, 4);
+        trial_opt.measure = false;
+        let trial = sample_patches(&net, &t, &trial_opt).unwrap();
+        assert_eq!(trial.report.rounds, 1);
+        assert!(trial
+            .patches
+            .iter()
+            .all(|p| !p.measured && p.deviation() == 0.0));
+        let opt = SampleOptions::new(tol, b.diagonal());
+        let from = sample_patches_from(&net, &t, &opt, Some(trial.clone())).unwrap();
+        let mut scratch_opt = opt;
+        scratch_opt.min_intervals = 4;
+        let scratch = sample_patches(&net, &t, &scratch_opt).unwrap();
+        assert!(from.report.rounds > 1, "{:?}", from.report);
+        assert!(from.patches.iter().all(|p| p.measured));
+        assert_eq!(from.patches, scratch.patches);
+        assert_eq!(from.report, scratch.report);
+        // A start sampled on another net (the same torus at another voxel size).
+        let other = net_on(&t, &seeds_on(&t, Point3::origin(), 1.4, 40), &b, 0.2);
+        let wrong = sample_patches(&other, &t, &trial_opt).unwrap();
+        let ignored = sample_patches_from(&net, &t, &opt, Some(wrong)).unwrap();
+        assert_eq!(
+            ignored.patches,
+            sample_patches(&net, &t, &opt).unwrap().patches
         );
     }
 

@@ -213,6 +213,7 @@ mod tests {
                 corners: [0, 1 + p as u32, 100, 1 + ((p + 1) % n) as u32],
                 sides: [side(p), side(1000 + p), side(2000 + p), side((p + 1) % n)],
                 points: Vec::new(),
+                normals: Vec::new(),
                 params_u: Vec::new(),
                 params_v: Vec::new(),
                 tan_u0: Vec::new(),
@@ -224,6 +225,7 @@ mod tests {
                 deviation_cell: 0.0,
                 unprojected: 0,
                 max_residual: 0.0,
+                measured: true,
             });
             let (cu, cv) = (dir(p) * len, dir(p + 1) * len);
             let z = Vector3::z();

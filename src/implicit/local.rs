@@ -102,11 +102,20 @@ impl LocalFit {
 
 /// Measures a candidate at the support points.
 pub fn assess(f: LocalFunction, points: &[Point3<f64>], normals: &[Vector3<f64>]) -> LocalFit {
+    let values: Vec<(f64, Vector3<f64>)> = points.iter().map(|p| f.value_and_gradient(p)).collect();
+    assess_values(f, &values, normals)
+}
+
+/// [`assess`] from f and grad f at the points, already known.
+fn assess_values(
+    f: LocalFunction,
+    values: &[(f64, Vector3<f64>)],
+    normals: &[Vector3<f64>],
+) -> LocalFit {
     let mut max_residual = 0.0f64;
     let mut sq = 0.0f64;
     let mut agree = 0usize;
-    for (p, n) in points.iter().zip(normals) {
-        let (v, g) = f.value_and_gradient(p);
+    for (&(v, g), n) in values.iter().zip(normals) {
         max_residual = max_residual.max(v.abs());
         sq += v * v;
         if g.dot(n) > 0.3 * g.norm() * n.norm() {
@@ -119,11 +128,11 @@ pub fn assess(f: LocalFunction, points: &[Point3<f64>], normals: &[Vector3<f64>]
     LocalFit {
         function: f,
         max_residual,
-        rms_residual: (sq / points.len().max(1) as f64).sqrt(),
-        normal_agreement: if points.is_empty() {
+        rms_residual: (sq / values.len().max(1) as f64).sqrt(),
+        normal_agreement: if values.is_empty() {
             1.0
         } else {
-            agree as f64 / points.len() as f64
+            agree as f64 / values.len() as f64
         },
     }
 }
@@ -158,6 +167,18 @@ pub fn fit_rbf(
     ThinPlateRbf::fit_surface(points, normals, p.rbf_eps)
         .ok()
         .map(LocalFunction::Rbf)
+}
+
+/// Fits a thin-plate RBF through the points (as [`fit_rbf`]) and assesses it there, with f and
+/// grad f at the points read off its system (they are its centres) rather than evaluated.
+pub fn fit_rbf_assessed(
+    points: &[Point3<f64>],
+    normals: &[Vector3<f64>],
+    p: &LocalParams,
+) -> Option<LocalFit> {
+    let (f, values) =
+        ThinPlateRbf::fit_surface_with_point_values(points, normals, p.rbf_eps).ok()?;
+    Some(assess_values(LocalFunction::Rbf(f), &values, normals))
 }
 
 /// The better of two fits: meeting the tolerance first, then agreement, then residual.

@@ -56,7 +56,7 @@ use super::local::{self, LocalFit, LocalFunction, LocalKind, LocalParams};
 use super::poly::Degree;
 use super::Implicit;
 use crate::mesh::Aabb;
-use crate::spatial::{CellContext, Cube, Decision, KdTree, Octree};
+use crate::spatial::{BoxIndex, CellContext, Cube, Decision, KdTree, Octree};
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 
@@ -377,10 +377,12 @@ impl PouImplicit {
         let noise = super::noise::estimate_noise(&pts, &nrm, &kd, opts.min_points, 2000);
         let tol = (opts.tolerance * diagonal).max(noise);
         let spacing = sample_spacing(&pts, &kd).max(1e-9 * diagonal);
+        let boxes = BoxIndex::build(&pts);
         let builder = Builder {
             pts: &pts,
             nrm: &nrm,
             kd: &kd,
+            boxes: &boxes,
             opts,
             tol,
             spacing,
@@ -702,6 +704,8 @@ struct Builder<'a> {
     pts: &'a [Point3<f64>],
     nrm: &'a [Vector3<f64>],
     kd: &'a KdTree,
+    /// The same points for the cells' box queries.
+    boxes: &'a BoxIndex,
     opts: &'a FitOptions,
     tol: f64,
     /// Typical point spacing.
@@ -734,12 +738,7 @@ impl Builder<'_> {
 
     /// Indices of the points inside the box of half-width `h` around `c`.
     fn in_box(&self, c: &Point3<f64>, h: f64) -> Vec<usize> {
-        let mut idx = self.kd.within(c, h * 3f64.sqrt());
-        idx.retain(|&i| {
-            let p = &self.pts[i];
-            (0..3).all(|k| (p[k] - c[k]).abs() <= h)
-        });
-        idx
+        self.boxes.within_box(c, h)
     }
 
     fn leaf(&self, c: Point3<f64>, h: f64, n: usize, fit: LocalFit) -> Decision<Cell> {
@@ -872,7 +871,7 @@ impl Builder<'_> {
             let sn: Vec<Vector3<f64>> = sel.iter().map(|&i| n[i]).collect();
             local::fit_rbf(&sp, &sn, params)?
         } else {
-            local::fit_rbf(p, n, params)?
+            return local::fit_rbf_assessed(p, n, params);
         };
         Some(local::assess(fit, p, n))
     }

@@ -9,8 +9,9 @@
 //! giving the symmetric saddle-point system of eq. 6, `[A P; P^T 0] [lambda; p] = [h; 0]`. It is
 //! solved by faer's LU with partial pivoting (for the 60-130 unknowns of `fit`'s local RBFs
 //! about twice as fast as its symmetric-indefinite LBL^T, which pivots in smaller steps: the
-//! bunny's implicit 3.7 -> 3.3 s); the residual is checked and a singular or inaccurate solve
-//! is an `Err`, never a panic.
+//! bunny's implicit 3.7 -> 3.3 s; a Cholesky solve in the null space of P^T, half the flops on
+//! paper, was slower still at these sizes); the residual is checked and a singular or
+//! inaccurate solve is an `Err`, never a panic.
 //!
 //! Coordinates are centred and scaled (x -> (x - o) / L) before solving: the interpolant is
 //! invariant under this (phi(s r) = s^2 phi(r) + s^2 log(s) r^2 and the r^2 part is cancelled by
@@ -25,6 +26,9 @@ use crate::{Error, Result};
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 use nalgebra::{Point3, Vector3};
+
+/// f and grad f at a point.
+pub type ValueAndGradient = (f64, Vector3<f64>);
 
 /// A fitted thin-plate RBF implicit.
 #[derive(Debug, Clone, PartialEq)]
@@ -43,6 +47,27 @@ impl ThinPlateRbf {
     /// Interpolates the values `h` at `centers` (eq. 1-6). Needs at least 4 non-coplanar
     /// centres; duplicate centres make the system singular (an `Err`).
     pub fn fit(centers: &[Point3<f64>], h: &[f64]) -> Result<ThinPlateRbf> {
+        Self::solve(centers, h, 0).map(|(f, _)| f)
+    }
+
+    /// [`fit`](Self::fit), also returning f and grad f at the first `at` centres, read off the
+    /// system instead of evaluated: f(c_i) is row i of eq. 6, (A lambda + P p)_i, and
+    /// grad f(c_i) = sum_j lambda_j (c_i - c_j)(ln r_ij^2 + 1) + P with ln r_ij^2 = 2 A_ij / r_ij^2,
+    /// so no logarithm is taken again (checking a fit at its own centres otherwise costs as
+    /// much as building its matrix).
+    pub fn fit_with_centre_values(
+        centers: &[Point3<f64>],
+        h: &[f64],
+        at: usize,
+    ) -> Result<(ThinPlateRbf, Vec<ValueAndGradient>)> {
+        Self::solve(centers, h, at.min(centers.len()))
+    }
+
+    fn solve(
+        centers: &[Point3<f64>],
+        h: &[f64],
+        at: usize,
+    ) -> Result<(ThinPlateRbf, Vec<ValueAndGradient>)> {
         let n = centers.len();
         if n < 4 || h.len() != n {
             return Err(Error::Degenerate(format!(
@@ -83,11 +108,24 @@ impl ThinPlateRbf {
         let mut a = Mat::<f64>::zeros(m, m);
         let coord = |k: usize| -> Vec<f64> { xs.iter().map(|x| x[k]).collect() };
         let (cx, cy, cz) = (coord(0), coord(1), coord(2));
-        let mut col = vec![0.0; n];
+        // A, column-major: column j from the diagonal down by the vectorized kernel, mirrored
+        // into row j ((x_i - x_j)^2 = (x_j - x_i)^2 exactly, so this is the whole matrix for
+        // half the logarithms).
+        let mut phi = vec![0.0; n * n];
         for j in 0..n {
-            // Column j of A, whole (the vectorized kernel; (x_i - x_j)^2 = (x_j - x_i)^2
-            // exactly, so A stays exactly symmetric).
-            phi_column(&cx, &cy, &cz, [xs[j].x, xs[j].y, xs[j].z], &mut col);
+            let below = &mut phi[j * n + j..(j + 1) * n];
+            phi_column(
+                &cx[j..],
+                &cy[j..],
+                &cz[j..],
+                [xs[j].x, xs[j].y, xs[j].z],
+                below,
+            );
+            for k in 1..n - j {
+                phi[(j + k) * n + j] = phi[j * n + j + k];
+            }
+        }
+        for (j, col) in phi.chunks_exact(n).enumerate() {
             for (i, &v) in col.iter().enumerate() {
                 a[(i, j)] = v;
             }
@@ -105,30 +143,49 @@ impl ThinPlateRbf {
             b[(i, 0)] = h[i];
         }
         let x = a.partial_piv_lu().solve(&b);
-        // Residual check: the factorization does not report singularity itself.
-        let mut res = 0.0f64;
-        let mut bnorm = 0.0f64;
-        for i in 0..m {
-            let mut s = 0.0;
-            for j in 0..m {
-                s += a[(i, j)] * x[(j, 0)];
-            }
-            res = res.max((s - b[(i, 0)]).abs());
-            bnorm = bnorm.max(b[(i, 0)].abs());
-        }
+        // Residual check: the factorization does not report near-singularity itself.
+        let r = &a * &x - &b;
+        let res = (0..m).map(|i| r[(i, 0)].abs()).fold(0.0f64, f64::max);
+        let bnorm = (0..m).map(|i| b[(i, 0)].abs()).fold(0.0f64, f64::max);
         let xmax = (0..m).map(|i| x[(i, 0)].abs()).fold(0.0, f64::max);
         if !res.is_finite() || !xmax.is_finite() || res > 1e-8 * (bnorm + xmax) {
             return Err(Error::Numerical(format!(
                 "thin-plate RBF system is singular or ill-conditioned (residual {res:.3e})"
             )));
         }
-        Ok(ThinPlateRbf {
+        let lambda: Vec<f64> = (0..n).map(|i| x[(i, 0)]).collect();
+        let p = Vector3::new(x[(n + 1, 0)], x[(n + 2, 0)], x[(n + 3, 0)]);
+        let at_centres = (0..at)
+            .map(|i| {
+                // Row i of A is column i (symmetric), contiguous.
+                let row = &phi[i * n..(i + 1) * n];
+                let (mut gx, mut gy, mut gz) = (0.0, 0.0, 0.0);
+                for j in 0..n {
+                    let (dx, dy, dz) = (cx[i] - cx[j], cy[i] - cy[j], cz[i] - cz[j]);
+                    let r2 = dx * dx + dy * dy + dz * dz;
+                    let t = if r2 > 0.0 {
+                        lambda[j] * (2.0 * row[j] / r2 + 1.0)
+                    } else {
+                        0.0
+                    };
+                    gx += dx * t;
+                    gy += dy * t;
+                    gz += dz * t;
+                }
+                (
+                    r[(i, 0)] + b[(i, 0)],
+                    (p + Vector3::new(gx, gy, gz)) / scale,
+                )
+            })
+            .collect();
+        let rbf = ThinPlateRbf {
             origin,
             scale,
-            kernel: Centres::new(&xs, &(0..n).map(|i| x[(i, 0)]).collect::<Vec<_>>()),
+            kernel: Centres::new(&xs, &lambda),
             p0: x[(n, 0)],
-            p: Vector3::new(x[(n + 1, 0)], x[(n + 2, 0)], x[(n + 3, 0)]),
-        })
+            p,
+        };
+        Ok((rbf, at_centres))
     }
 
     /// Surface implicit through `points` (value 0) with off-surface constraints (seed 003 eq. 4b):
@@ -141,6 +198,16 @@ impl ThinPlateRbf {
         normals: &[Vector3<f64>],
         eps: f64,
     ) -> Result<ThinPlateRbf> {
+        Self::fit_surface_with_point_values(points, normals, eps).map(|(f, _)| f)
+    }
+
+    /// [`fit_surface`](Self::fit_surface), also returning f and grad f at `points` (see
+    /// [`fit_with_centre_values`](Self::fit_with_centre_values)).
+    pub fn fit_surface_with_point_values(
+        points: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        eps: f64,
+    ) -> Result<(ThinPlateRbf, Vec<ValueAndGradient>)> {
         if points.len() != normals.len() {
             return Err(Error::Degenerate(
                 "points and normals differ in count".into(),
@@ -175,7 +242,7 @@ impl ThinPlateRbf {
                 }
             }
         }
-        ThinPlateRbf::fit(&c, &h)
+        ThinPlateRbf::fit_with_centre_values(&c, &h, points.len())
     }
 
     /// Number of centres.
@@ -204,6 +271,14 @@ impl ThinPlateRbf {
     }
 }
 
+/// Eq. 6 in the null space of P^T: with P = [1 x y z] = Q [R; 0] (four Householder
+/// reflections) and Z the last n - 4 columns of Q, lambda = Z gamma satisfies eq. 5 for every
+/// gamma, and (Z^T A Z) gamma = Z^T h. The thin-plate kernel is conditionally positive
+/// definite of order 2 (Duchon; Micchelli 1986), so Z^T A Z is positive definite for distinct
+/// centres and is solved by Cholesky, with half the flops of an LU of the whole saddle-point
+/// system (Beatson, Light & Billings 2000 use the same reduction). The linear part: R p =
+/// (Q^T h)_{1..4} - (Q^T A Z gamma)_{1..4}. `phi` is A, column-major. None when P is rank
+/// deficient or Z^T A Z is not numerically positive definite (the caller then uses LU).
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -222,6 +297,19 @@ mod tests {
             nn.push(d);
         }
         (p, nn)
+    }
+
+    #[test]
+    fn values_read_off_the_system_match_evaluation() {
+        let (p, n) = sphere_points(40);
+        let (f, at) = ThinPlateRbf::fit_surface_with_point_values(&p, &n, 0.1).unwrap();
+        assert_eq!(at.len(), p.len());
+        assert_eq!(f, ThinPlateRbf::fit_surface(&p, &n, 0.1).unwrap());
+        for (q, (v, g)) in p.iter().zip(&at) {
+            let (ve, ge) = f.value_and_gradient(q);
+            assert!((v - ve).abs() < 1e-10, "{v} {ve}");
+            assert!((g - ge).norm() < 1e-9 * ge.norm(), "{g} {ge}");
+        }
     }
 
     #[test]

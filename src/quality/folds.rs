@@ -8,7 +8,8 @@
 //! can fall into it (a local minimum of the distance).
 //!
 //! **Measure.** For every grid cell of every patch, the normal of the patch at the cell's
-//! centre is compared with the unit gradients of f at the cell's four grid points; the cell's
+//! centre is compared with the unit gradients of f at the cell's four grid points (kept by the
+//! sampler, which computed them when it put the points on f = 0); the cell's
 //! fold angle is the smallest of the four angles (a surface that merely turns across the cell,
 //! over a rounded crease, stays close to one of its corners' normals; a fold faces away from
 //! all of them), and a patch's fold angle is the largest over its cells. A patch is folded
@@ -16,7 +17,6 @@
 //! the `fit` report gives so that a user sees how many patches to inspect (`worst` lists
 //! where).
 
-use crate::implicit::Implicit;
 use crate::nurbs::PatchNetwork;
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
@@ -48,25 +48,19 @@ pub struct FoldReport {
     pub worst: Vec<FoldSample>,
 }
 
-/// The sample grid of one patch: points on f = 0 at the parameters `params_u` x `params_v`.
+/// The sample grid of one patch: points on f = 0 at the parameters `params_u` x `params_v`,
+/// and the implicit's normals there (any length; only directions are compared).
 pub struct SampleGrid<'a> {
     pub points: &'a [Vec<Point3<f64>>],
+    pub normals: &'a [Vec<Vector3<f64>>],
     pub params_u: &'a [f64],
     pub params_v: &'a [f64],
 }
 
 /// Largest fold angle over the patch's cells (module doc), with the surface point where it
 /// occurs.
-fn patch_fold<I: Implicit + ?Sized>(
-    f: &I,
-    surface: &crate::nurbs::BSplineSurface,
-    grid: &SampleGrid<'_>,
-) -> (f64, Point3<f64>) {
-    let normals: Vec<Vec<Vector3<f64>>> = grid
-        .points
-        .iter()
-        .map(|col| col.iter().map(|p| f.gradient(p)).collect())
-        .collect();
+fn patch_fold(surface: &crate::nurbs::BSplineSurface, grid: &SampleGrid<'_>) -> (f64, Point3<f64>) {
+    let normals = grid.normals;
     let (pu, pv) = (grid.params_u, grid.params_v);
     let mut worst = (0.0, grid.points[0][0]);
     for i in 0..pu.len().saturating_sub(1) {
@@ -85,17 +79,13 @@ fn patch_fold<I: Implicit + ?Sized>(
     worst
 }
 
-/// Folds of `network`, whose face k interpolates `grids[k]` on the implicit `f`.
-pub fn folds<I: Implicit + Sync + ?Sized>(
-    f: &I,
-    network: &PatchNetwork,
-    grids: &[SampleGrid<'_>],
-) -> FoldReport {
+/// Folds of `network`, whose face k interpolates `grids[k]`.
+pub fn folds(network: &PatchNetwork, grids: &[SampleGrid<'_>]) -> FoldReport {
     let per: Vec<(f64, Point3<f64>)> = network
         .faces
         .par_iter()
         .zip(grids.par_iter())
-        .map(|(face, g)| patch_fold(f, &face.surface, g))
+        .map(|(face, g)| patch_fold(&face.surface, g))
         .collect();
     let mut folded: Vec<FoldSample> = per
         .iter()
@@ -119,6 +109,7 @@ pub fn folds<I: Implicit + Sync + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::implicit::Implicit;
     use crate::nurbs::{BSplineSurface, Params, PatchGrid, PatchInput, Twist};
     use crate::polygonize::test_shapes::Sphere;
 
@@ -170,12 +161,18 @@ mod tests {
                 }],
             )
             .unwrap();
+            let normals: Vec<Vec<Vector3<f64>>> = grid
+                .points
+                .iter()
+                .map(|col| col.iter().map(|p| s.gradient(p)).collect())
+                .collect();
             let g = [SampleGrid {
                 points: &grid.points,
+                normals: &normals,
                 params_u: &params,
                 params_v: &params,
             }];
-            folds(&s, &net, &g)
+            folds(&net, &g)
         };
         let r = build(exact.clone());
         assert_eq!(r.patches_over_45_deg, 0, "{r:?}");

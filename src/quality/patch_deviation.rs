@@ -5,11 +5,14 @@
 //! point inversion (`BSplineSurface::closest_point`) starts from the nearest sample's (u, v);
 //! the smallest distance wins. Candidates from the `k` nearest samples cover points near patch
 //! edges and corners, where the true foot point can lie on any of up to (valence) patches.
+//! A candidate whose control points' bounding box is no nearer than the best distance found
+//! is skipped: a B-spline patch lies in the convex hull of its control points, so it cannot be
+//! nearer either (the result is the same as trying it).
 
 use crate::metrics::deviation::Deviation;
 use crate::nurbs::PatchNetwork;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::num::NonZeroUsize;
@@ -51,6 +54,27 @@ pub fn deviation_from_patches(
             }
         }
     }
+    // Control-point bounding boxes.
+    let boxes: Vec<(Vector3<f64>, Vector3<f64>)> = net
+        .faces
+        .iter()
+        .map(|f| {
+            f.surface.ctrl.iter().flatten().fold(
+                (
+                    Vector3::repeat(f64::INFINITY),
+                    Vector3::repeat(f64::NEG_INFINITY),
+                ),
+                |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
+            )
+        })
+        .collect();
+    let box_distance = |fi: usize, p: &Point3<f64>| {
+        let (lo, hi) = &boxes[fi];
+        (lo - p.coords)
+            .sup(&(p.coords - hi))
+            .sup(&Vector3::zeros())
+            .norm()
+    };
     let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&positions).ok();
     let distances: Vec<f64> = match (tree, NonZeroUsize::new(NEAREST.min(samples.len()))) {
         (Some(tree), Some(k)) => points
@@ -68,6 +92,9 @@ pub fn deviation_from_patches(
                         continue;
                     }
                     tried.push(fi);
+                    if box_distance(fi as usize, p) >= best {
+                        continue;
+                    }
                     let c = net.faces[fi as usize].surface.closest_point(p, (u, v));
                     best = best.min(c.distance);
                 }
