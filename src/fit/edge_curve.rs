@@ -44,7 +44,7 @@
 //! tangents (exact in floating point).
 
 use crate::implicit::Implicit;
-use crate::polygonize::newton::solve_on_line;
+use crate::polygonize::newton::{solve_on_line, solve_on_line_valued};
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 
@@ -68,6 +68,8 @@ pub struct EdgeSamples {
     pub tangents: Vec<Vector3<f64>>,
     /// Unit normals grad f / |grad f| at each point.
     pub normals: Vec<Vector3<f64>>,
+    /// |f| / |grad f| at each point, as the root finder left it ([`residual`]).
+    pub residuals: Vec<f64>,
     pub method: EdgeMethod,
     /// Unit in-plane normal w of the section plane (orthogonal to the chord; the plane is
     /// spanned by the chord and w), independent of the direction the edge is walked.
@@ -79,6 +81,22 @@ impl EdgeSamples {
     pub fn intervals(&self) -> usize {
         self.points.len() - 1
     }
+}
+
+/// |f| / |grad f|, the first-order distance from f = 0 (infinite where it is not finite).
+pub fn residual(v: f64, g: &Vector3<f64>) -> f64 {
+    let r = v.abs() / g.norm();
+    if r.is_finite() {
+        r
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// [`residual`] at p, evaluated.
+fn residual_at<I: Implicit + ?Sized>(f: &I, p: &Point3<f64>) -> f64 {
+    let (v, g) = f.value_and_gradient(p);
+    residual(v, &g)
 }
 
 fn unit(g: Vector3<f64>) -> Option<Vector3<f64>> {
@@ -192,8 +210,9 @@ fn sample_curve<I: Implicit + ?Sized>(
         )));
     }
     let x = e / len;
-    let ga = f.gradient(&a);
-    let gb = f.gradient(&b);
+    let (va, ga) = f.value_and_gradient(&a);
+    let (vb, gb) = f.value_and_gradient(&b);
+    let ends = [residual(va, &ga), residual(vb, &gb)];
     let (Some(na), Some(nb)) = (unit(ga), unit(gb)) else {
         return Err(Error::Numerical(format!(
             "{}: the implicit's gradient vanishes at an end",
@@ -246,7 +265,7 @@ fn sample_curve<I: Implicit + ?Sized>(
             r,
         }
     };
-    let family = sample_family(f, &fam, a, b, ga, gb, n, tol, len).filter(ordered);
+    let family = sample_family(f, &fam, a, b, ga, gb, ends, n, tol, len).filter(ordered);
     if let Some(mut es) = family {
         es.plane_w = w;
         return Ok(es);
@@ -265,6 +284,8 @@ fn sample_curve<I: Implicit + ?Sized>(
         .or_else(|_| projected_chord(f, a, b, ga, gb, n, tol))
         .map(|mut es| {
             es.plane_w = w;
+            // These rarer methods resample or fall back: their residuals are evaluated.
+            es.residuals = es.points.iter().map(|p| residual_at(f, p)).collect();
             es
         })
         .map_err(|err| Error::Numerical(format!("{}: {err}", where_())))
@@ -292,6 +313,7 @@ fn projected_chord<I: Implicit + ?Sized>(
         points: Vec::with_capacity(n + 1),
         tangents: Vec::with_capacity(n + 1),
         normals: Vec::with_capacity(n + 1),
+        residuals: Vec::new(),
         method: EdgeMethod::ProjectedChord,
         plane_w: Vector3::zeros(),
     };
@@ -341,6 +363,7 @@ fn sample_family<I: Implicit + ?Sized>(
     b: Point3<f64>,
     ga: Vector3<f64>,
     gb: Vector3<f64>,
+    ends: [f64; 2],
     n: usize,
     tol: f64,
     len: f64,
@@ -348,20 +371,27 @@ fn sample_family<I: Implicit + ?Sized>(
     let mut points = Vec::with_capacity(n + 1);
     let mut tangents = Vec::with_capacity(n + 1);
     let mut normals = Vec::with_capacity(n + 1);
+    let mut residuals = Vec::with_capacity(n + 1);
     for k in 0..=n {
         let t = k as f64 / n as f64;
         let (o, d_o, dir, d_dir) = fam.line(t);
-        let (p, s, g) = if k == 0 || k == n {
+        let (p, s, g, res) = if k == 0 || k == n {
             let p = if k == 0 { a } else { b };
-            (p, (p - o).dot(&dir), if k == 0 { ga } else { gb })
+            let end = if k == 0 { 0 } else { 1 };
+            (
+                p,
+                (p - o).dot(&dir),
+                if k == 0 { ga } else { gb },
+                ends[end],
+            )
         } else {
             let (s0, window) = match *fam {
                 Family::Chord { .. } => (0.0, len),
                 Family::Polar { r, .. } => (r, r.min(len)),
             };
-            let (ds, g) = solve_on_line(f, o + dir * s0, dir, window, tol).ok()?;
+            let (ds, g, v) = solve_on_line_valued(f, o + dir * s0, dir, window, tol).ok()?;
             let s = s0 + ds;
-            (o + dir * s, s, g)
+            (o + dir * s, s, g, residual(v, &g))
         };
         let gd = g.dot(&dir);
         if gd.abs() <= 0.05 * g.norm() || gd.is_nan() {
@@ -371,11 +401,13 @@ fn sample_family<I: Implicit + ?Sized>(
         points.push(p);
         tangents.push(d_o + dir * ds + d_dir * s);
         normals.push(unit(g)?);
+        residuals.push(res);
     }
     Some(EdgeSamples {
         points,
         tangents,
         normals,
+        residuals,
         method: EdgeMethod::Lines,
         plane_w: Vector3::zeros(),
     })
@@ -503,6 +535,7 @@ fn trace_section<I: Implicit + ?Sized>(
         points,
         tangents,
         normals,
+        residuals: Vec::new(),
         method: EdgeMethod::Traced,
         plane_w: Vector3::zeros(),
     })
@@ -536,7 +569,11 @@ mod tests {
             // Tangent: in the tangent plane, d/dt of the arc, length pi/2.
             assert!(ed.tangents[k].dot(&ed.normals[k]).abs() < 1e-12);
             assert!((ed.tangents[k].norm() - std::f64::consts::FRAC_PI_2).abs() < 1e-10);
+            // The residual the solver reports is the one an evaluation at the point gives.
+            let (v, g) = s.value_and_gradient(&p);
+            assert!((ed.residuals[k] - residual(v, &g)).abs() < 1e-15, "{k}");
         }
+        assert_eq!(ed.residuals.len(), 9);
         // Degenerate edges are errors.
         let z = Vector3::zeros();
         assert!(sample_edge(&s, a, a, z, 4, 1e-12).is_err());

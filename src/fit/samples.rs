@@ -61,7 +61,7 @@
 //! valence != 4 one bicubic per quad cannot be G1 in general (Peters & Fan), so no twist
 //! compatibility is attempted here.
 
-use super::edge_curve::{sample_edge, sample_section, EdgeMethod, EdgeSamples};
+use super::edge_curve::{residual, sample_edge, sample_section, EdgeMethod, EdgeSamples};
 use super::ribbons::{ribbons, Ribbons};
 use super::spline_check::spline_midpoints;
 use crate::implicit::Implicit;
@@ -156,9 +156,10 @@ pub struct PatchSamples {
     /// (0 unless the implicit misbehaves there).
     pub unprojected: usize,
     /// Largest |f| / |grad f| over the samples (about 1e-12 of the model size; larger where
-    /// the implicit jumps across zero and a sample sits on the jump).
+    /// the implicit jumps across zero and a sample sits on the jump), from the root finders'
+    /// last evaluations ([`EdgeSamples::residuals`]).
     pub max_residual: f64,
-    /// Whether the three deviations and `max_residual` were measured (else they are 0; see
+    /// Whether the three deviations were measured (else they are 0; see
     /// [`SampleOptions::measure`]).
     pub measured: bool,
 }
@@ -607,13 +608,15 @@ fn one_sided_derivative(p: [Vector3<f64>; 4], n: usize, h: f64) -> Vector3<f64> 
 }
 
 /// An interior row: its points, d/du at its two ends, and how many points are off the surface.
-/// An interior row: points, normals, d/du at both ends, samples left off the surface.
+/// An interior row: points, normals, d/du at both ends, samples left off the surface, the
+/// largest |f| / |grad f| of its points.
 type Row = (
     Vec<Point3<f64>>,
     Vec<Vector3<f64>>,
     Vector3<f64>,
     Vector3<f64>,
     usize,
+    f64,
 );
 
 /// The transfinite (Coons) patch of four boundary sample rows, for interior hints and the
@@ -727,15 +730,16 @@ impl Coons<'_> {
         let common = (self.right.p[j] - self.left.p[j]) - ((cb - ca) * (1.0 - v) + (cc - cd) * v);
         let d0 = self.bot.d[0] * (1.0 - v) + self.top.d[0] * v + common;
         let d1 = self.bot.d[s] * (1.0 - v) + self.top.d[s] * v + common;
+        let mut worst = 0.0f64;
         let normals = row
             .iter()
             .map(|p| {
-                f.gradient(p)
-                    .try_normalize(0.0)
-                    .unwrap_or_else(Vector3::zeros)
+                let (v, g) = f.value_and_gradient(p);
+                worst = worst.max(residual(v, &g));
+                g.try_normalize(0.0).unwrap_or_else(Vector3::zeros)
             })
             .collect();
-        (row, normals, d0, d1, missed)
+        (row, normals, d0, d1, missed, worst)
     }
 }
 
@@ -828,14 +832,30 @@ fn build_patch<I: Implicit + ?Sized>(
             let w = blend + hint * (1.0 - blend.norm()).max(0.0);
             match sample_section(f, left.p[j], right.p[j], w, s, tol) {
                 Ok(row) if coons.row_near(&row.points, j, &pu, pv[j]) => {
-                    (row.points, row.normals, row.tangents[0], row.tangents[s], 0)
+                    let worst = row.residuals.iter().fold(0.0, |a: f64, &b| a.max(b));
+                    (
+                        row.points,
+                        row.normals,
+                        row.tangents[0],
+                        row.tangents[s],
+                        0,
+                        worst,
+                    )
                 }
                 _ => coons.row_fallback(f, j, &pu, pv[j], tol, opt.scale),
             }
         })
         .collect();
     let mut unprojected = 0;
-    for (j, (row, row_normals, d0, d1, missed)) in (1..t).zip(rows) {
+    // Largest |f| / |grad f| of the samples, as the root finders left them: the four edges',
+    // then the rows'.
+    let mut max_residual = sides
+        .iter()
+        .filter_map(|sd| edges[sd.edge as usize].as_ref())
+        .flat_map(|e| e.residuals.iter().copied())
+        .fold(0.0, f64::max);
+    for (j, (row, row_normals, d0, d1, missed, worst)) in (1..t).zip(rows) {
+        max_residual = max_residual.max(worst);
         for i in 1..s {
             points[i][j] = row[i];
             normals[i][j] = row_normals[i];
@@ -893,7 +913,7 @@ fn build_patch<I: Implicit + ?Sized>(
         deviation_v: 0.0,
         deviation_cell: 0.0,
         unprojected,
-        max_residual: 0.0,
+        max_residual,
         measured: false,
     };
     if opt.measure {
@@ -903,8 +923,7 @@ fn build_patch<I: Implicit + ?Sized>(
 }
 
 /// Measures a patch's samples: the deviation from f = 0 of its row splines (u) and column
-/// splines (v) at their interval midpoints, the estimate at the cell centres, and the largest
-/// residual of the samples themselves.
+/// splines (v) at their interval midpoints, and the estimate at the cell centres.
 fn measure<I: Implicit + ?Sized>(f: &I, p: &mut PatchSamples) {
     let (s, t) = (p.s(), p.t());
     let (points, pu, pv) = (&p.points, &p.params_u, &p.params_v);
@@ -927,10 +946,6 @@ fn measure<I: Implicit + ?Sized>(f: &I, p: &mut PatchSamples) {
         })
         .collect();
     let deviation_u = row_mids.iter().map(|r| max_dist(r)).fold(0.0, f64::max);
-    let max_residual = points
-        .iter()
-        .map(|col| max_dist(&col.iter().map(|p| p.coords).collect::<Vec<_>>()))
-        .fold(0.0, f64::max);
     let deviation_v = (0..=s)
         .map(|i| {
             let col: Vec<Vector3<f64>> = points[i].iter().map(|p| p.coords).collect();
@@ -964,7 +979,6 @@ fn measure<I: Implicit + ?Sized>(f: &I, p: &mut PatchSamples) {
     p.deviation_u = deviation_u;
     p.deviation_v = deviation_v;
     p.deviation_cell = deviation_cell;
-    p.max_residual = max_residual;
     p.measured = true;
 }
 

@@ -100,6 +100,18 @@ pub fn solve_on_line<I: Implicit + ?Sized>(
     s_max: f64,
     tol: f64,
 ) -> Result<(f64, Vector3<f64>)> {
+    solve_on_line_valued(f, o, w, s_max, tol).map(|(s, g, _)| (s, g))
+}
+
+/// [`solve_on_line`], also returning f at the root found (what its last evaluation gave, so
+/// callers that report |f| / |grad f| need not evaluate again): (s, grad f, f).
+pub fn solve_on_line_valued<I: Implicit + ?Sized>(
+    f: &I,
+    o: Point3<f64>,
+    w: Vector3<f64>,
+    s_max: f64,
+    tol: f64,
+) -> Result<(f64, Vector3<f64>, f64)> {
     let at = |s: f64| f.value_and_gradient(&(o + w * s));
     // Newton from s = 0.
     let mut s = 0.0;
@@ -109,7 +121,7 @@ pub fn solve_on_line<I: Implicit + ?Sized>(
             break;
         }
         if v.abs() <= tol * g.norm() {
-            return Ok((s, g));
+            return Ok((s, g, v));
         }
         let d = g.dot(&w);
         if d == 0.0 || !d.is_finite() {
@@ -129,7 +141,7 @@ pub fn solve_on_line<I: Implicit + ?Sized>(
     }
     // Stalled close enough (noise below tol): accept within 1000 tol.
     if v.is_finite() && v.abs() <= 1e3 * tol * g.norm() {
-        return Ok((s, g));
+        return Ok((s, g, v));
     }
     // Fallback: nearest sign change on a grid of 32 steps each way, then Illinois.
     scan_and_refine(
@@ -172,6 +184,7 @@ pub fn solve_on_line_facing<I: Implicit + ?Sized>(
         &|lo, hi| lo <= 0.0 && hi > 0.0,
         "outward-facing surface point",
     )
+    .map(|(s, g, _)| (s, g))
 }
 
 /// The bracketing fallback of both line solvers: the nearest bracket `accept`s
@@ -185,7 +198,7 @@ fn scan_and_refine(
     n: usize,
     accept: &dyn Fn(f64, f64) -> bool,
     what: &str,
-) -> Result<(f64, Vector3<f64>)> {
+) -> Result<(f64, Vector3<f64>, f64)> {
     let Some((a, fa, b, fb)) = nearest_bracket(&|s| at(s).0, s_max, n, accept) else {
         return Err(Error::Numerical(format!(
             "no {what} on the line through ({:.6}, {:.6}, {:.6}) within {s_max:.3e}",
@@ -226,14 +239,14 @@ fn nearest_bracket(
 }
 
 /// Illinois (modified regula falsi) on a bracket (a, f(a)), (b, f(b)) of opposite signs.
-/// Returns (s, grad f) at the root, or None when the iteration fails.
+/// Returns (s, grad f, f) at the root, or None when the iteration fails.
 fn refine_bracket(
     at: &dyn Fn(f64) -> (f64, Vector3<f64>),
     (mut a, mut fa): (f64, f64),
     (mut b, mut fb): (f64, f64),
     s_max: f64,
     tol: f64,
-) -> Option<(f64, Vector3<f64>)> {
+) -> Option<(f64, Vector3<f64>, f64)> {
     let mut side = 0i8;
     for _ in 0..200 {
         let c = (a * fb - b * fa) / (fb - fa);
@@ -242,13 +255,13 @@ fn refine_bracket(
             break;
         }
         if fc.abs() <= tol * gc.norm() {
-            return Some((c, gc));
+            return Some((c, gc, fc));
         }
         if (b - a).abs() <= 1e-15 * s_max {
             // The bracket closed: f changes sign here. If |f| is not small, f jumps across
             // zero (a defect of the implicit); the sign change is still where its zero set
             // is, so it is returned and callers measure |f| / |grad f| to report it.
-            return Some((c, gc));
+            return Some((c, gc, fc));
         }
         if (fc <= 0.0) == (fb <= 0.0) {
             b = c;
