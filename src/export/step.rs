@@ -253,14 +253,17 @@ struct Entities {
 impl Entities {
     fn add(&mut self, body: impl AsRef<str>) -> usize {
         self.text.push_str(body.as_ref());
-        self.ends.push(self.text.len());
-        self.ends.len()
+        self.close()
     }
     /// `CARTESIAN_POINT('',(x,y,z))`, formatted in place.
     fn add_point(&mut self, p: &Point3<f64>) -> usize {
         self.text.push_str("CARTESIAN_POINT('',(");
         push_reals(&mut self.text, [p.x, p.y, p.z]);
         self.text.push_str("))");
+        self.close()
+    }
+    /// Ends the body written last; its id.
+    fn close(&mut self) -> usize {
         self.ends.push(self.text.len());
         self.ends.len()
     }

@@ -607,7 +607,6 @@ fn one_sided_derivative(p: [Vector3<f64>; 4], n: usize, h: f64) -> Vector3<f64> 
     }
 }
 
-/// An interior row: its points, d/du at its two ends, and how many points are off the surface.
 /// An interior row: points, normals, d/du at both ends, samples left off the surface, the
 /// largest |f| / |grad f| of its points.
 type Row = (
@@ -931,12 +930,7 @@ fn measure<I: Implicit + ?Sized>(f: &I, p: &mut PatchSamples) {
     // Tolerance estimate along rows (u), columns (v) and at cell centres.
     let dist = |p: &Vector3<f64>| {
         let (val, g) = f.value_and_gradient(&Point3::from(*p));
-        let r = val.abs() / g.norm();
-        if r.is_finite() {
-            r
-        } else {
-            f64::INFINITY
-        }
+        residual(val, &g)
     };
     let max_dist = |v: &[Vector3<f64>]| v.iter().map(dist).fold(0.0, f64::max);
     let row_mids: Vec<Vec<Vector3<f64>>> = (0..=t)

@@ -271,14 +271,6 @@ impl ThinPlateRbf {
     }
 }
 
-/// Eq. 6 in the null space of P^T: with P = [1 x y z] = Q [R; 0] (four Householder
-/// reflections) and Z the last n - 4 columns of Q, lambda = Z gamma satisfies eq. 5 for every
-/// gamma, and (Z^T A Z) gamma = Z^T h. The thin-plate kernel is conditionally positive
-/// definite of order 2 (Duchon; Micchelli 1986), so Z^T A Z is positive definite for distinct
-/// centres and is solved by Cholesky, with half the flops of an LU of the whole saddle-point
-/// system (Beatson, Light & Billings 2000 use the same reduction). The linear part: R p =
-/// (Q^T h)_{1..4} - (Q^T A Z gamma)_{1..4}. `phi` is A, column-major. None when P is rank
-/// deficient or Z^T A Z is not numerically positive definite (the caller then uses LU).
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -255,14 +255,21 @@ impl BSplineSurface {
         }
     }
 
-    /// Diagonal of the control points' bounding box (a size scale for tolerances).
-    pub fn ctrl_extent(&self) -> f64 {
+    /// Lower and upper corners of the control points' bounding box, which holds the surface
+    /// (convex hull property).
+    pub fn ctrl_bounds(&self) -> (Vector3<f64>, Vector3<f64>) {
         let mut lo = Vector3::repeat(f64::INFINITY);
         let mut hi = Vector3::repeat(f64::NEG_INFINITY);
         for p in self.ctrl.iter().flatten() {
             lo = lo.inf(&p.coords);
             hi = hi.sup(&p.coords);
         }
+        (lo, hi)
+    }
+
+    /// Diagonal of the control points' bounding box (a size scale for tolerances).
+    pub fn ctrl_extent(&self) -> f64 {
+        let (lo, hi) = self.ctrl_bounds();
         (hi - lo).norm()
     }
 

@@ -54,20 +54,8 @@ pub fn deviation_from_patches(
             }
         }
     }
-    // Control-point bounding boxes.
-    let boxes: Vec<(Vector3<f64>, Vector3<f64>)> = net
-        .faces
-        .iter()
-        .map(|f| {
-            f.surface.ctrl.iter().flatten().fold(
-                (
-                    Vector3::repeat(f64::INFINITY),
-                    Vector3::repeat(f64::NEG_INFINITY),
-                ),
-                |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
-            )
-        })
-        .collect();
+    let boxes: Vec<(Vector3<f64>, Vector3<f64>)> =
+        net.faces.iter().map(|f| f.surface.ctrl_bounds()).collect();
     let box_distance = |fi: usize, p: &Point3<f64>| {
         let (lo, hi) = &boxes[fi];
         (lo - p.coords)
