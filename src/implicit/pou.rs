@@ -175,9 +175,13 @@ pub enum CellRole {
 pub struct Cell {
     pub center: Point3<f64>,
     pub half: Vector3<f64>,
+    /// 1 / `half`, per axis: the blend multiplies by it (divisions were a tenth of the blend).
+    pub inv_half: Vector3<f64>,
     /// Half-width of the cell itself relative to its support's (the support reaches one
     /// blending band beyond the cell: module doc, "Blending band").
     pub core: f64,
+    /// 1 / (1 - `core`), the blending band's width in units of `half`, inverted.
+    pub inv_band: f64,
     pub function: LocalFunction,
     /// Fitted, bridge or fallback (see `PouImplicit::blend` for how they combine).
     pub role: CellRole,
@@ -193,6 +197,8 @@ pub struct PouImplicit {
     points: Vec<Point3<f64>>,
     normals: Vec<Vector3<f64>>,
     kd: KdTree,
+    /// The points in Morton order, for box queries ([`BoxIndex`]): the density's.
+    boxes: BoxIndex,
     diagonal: f64,
     /// Typical point spacing (see `sample_spacing`).
     spacing: f64,
@@ -427,6 +433,7 @@ impl PouImplicit {
             points: pts,
             normals: nrm,
             kd,
+            boxes,
             diagonal,
             spacing,
             probes,
@@ -475,7 +482,7 @@ impl PouImplicit {
         let mut out = Vec::new();
         self.tree.for_each_support(x, |l| {
             let c = &cells[l];
-            let t = (x - c.center).component_div(&c.half);
+            let t = (x - c.center).component_mul(&c.inv_half);
             let prod: f64 = (0..3).map(|k| (1.0 - t[k] * t[k]).max(0.0)).product();
             let w = weight(1.0 - prod).0;
             out.push((l, w, c.function.value(x)));
@@ -508,7 +515,10 @@ impl PouImplicit {
         let r2 = r * r;
         let mut rho = 0.0;
         let mut g = Vector3::zeros();
-        for i in self.kd.within(x, r) {
+        // The points in the cube around the ball (the same terms in the same ascending order
+        // as a ball query: those beyond r have u <= 0; the Morton runs answer faster than
+        // the k-d tree, which was 4 % of `fit`).
+        for i in self.boxes.within_box(x, r) {
             let v = x - self.points[i];
             let u = density_base(v.norm_squared(), r2);
             if u > 0.0 {
@@ -524,9 +534,9 @@ impl PouImplicit {
     /// True when the data density at `x` certainly reaches `DENSITY_FULL`: a partial sum of
     /// rho over a few points already does (every term is non-negative), with `DENSE_MARGIN`.
     /// Then the density ramp of `blend` is 0 with zero slope and the full sum, a radius query,
-    /// is not needed. The points tried first are the probes of the octree cell holding x
-    /// (`node`; no query at all), then the `DENSE_PROBE` nearest to x; near the surface, where
-    /// `fit` evaluates, one of them nearly always decides.
+    /// is not needed. The points tried are the probes of the octree cell holding x (`node`;
+    /// no query at all), the `DENSE_PROBE` points nearest to its centre; near the surface,
+    /// where `fit` evaluates, they nearly always decide.
     fn dense(&self, x: &Point3<f64>, node: Option<usize>) -> bool {
         let r = DENSITY_RADIUS * self.spacing;
         let r2 = r * r;
@@ -545,13 +555,9 @@ impl PouImplicit {
                 return true;
             }
         }
-        let rho: f64 = self
-            .kd
-            .knn(x, DENSE_PROBE)
-            .into_iter()
-            .map(|(i, _)| term(i))
-            .sum();
-        rho >= full
+        // Otherwise the caller's full sum decides (a box query is cheaper than the k-d
+        // tree's nearest few, which cost 3.5 % of `fit` here).
+        false
     }
 
     /// F(x) and, when `with_gradient`, grad F(x) (seed 003 eq. 8 and its derivative).
@@ -590,7 +596,7 @@ impl PouImplicit {
         let cells = self.tree.payloads();
         let node = self.tree.for_each_support(x, |l| {
             let c = &cells[l];
-            let t = (x - c.center).component_div(&c.half);
+            let t = (x - c.center).component_mul(&c.inv_half);
             let q = Vector3::new(1.0 - t.x * t.x, 1.0 - t.y * t.y, 1.0 - t.z * t.z);
             if q.x <= 0.0 || q.y <= 0.0 || q.z <= 0.0 {
                 return;
@@ -603,23 +609,24 @@ impl PouImplicit {
             }
             let a = &mut acc[c.role as usize];
             let need_cover = c.role != CellRole::Fallback;
-            let core = c.core;
+            let (core, inv_band) = (c.core, c.inv_band);
             let psi = |t: f64| -> (f64, f64) {
                 let at = t.abs();
                 if at <= core {
                     (1.0, 0.0)
                 } else {
-                    let (r, dr) = ramp((at - core) / (1.0 - core));
-                    (r, dr * t.signum() / (1.0 - core))
+                    let (r, dr) = ramp((at - core) * inv_band);
+                    (r, dr * t.signum() * inv_band)
                 }
             };
             if with_gradient {
                 let (f, gf) = c.function.value_and_gradient(x);
                 // d d / d x_r = 2 t_r / a_r * prod_{s != r} q_s
+                let ih = c.inv_half;
                 let gd = Vector3::new(
-                    2.0 * t.x / c.half.x * q.y * q.z,
-                    2.0 * t.y / c.half.y * q.x * q.z,
-                    2.0 * t.z / c.half.z * q.x * q.y,
+                    2.0 * t.x * ih.x * q.y * q.z,
+                    2.0 * t.y * ih.y * q.x * q.z,
+                    2.0 * t.z * ih.z * q.x * q.y,
                 );
                 let gw = gd * dw;
                 a.s += w;
@@ -632,9 +639,9 @@ impl PouImplicit {
                     let (pz, dz) = psi(t.z);
                     a.c += px * py * pz;
                     a.gc += Vector3::new(
-                        dx / c.half.x * py * pz,
-                        dy / c.half.y * px * pz,
-                        dz / c.half.z * px * py,
+                        dx * ih.x * py * pz,
+                        dy * ih.y * px * pz,
+                        dz * ih.z * px * py,
                     );
                 }
             } else {
@@ -766,7 +773,9 @@ impl Builder<'_> {
             payload: Cell {
                 center: c,
                 half: Vector3::repeat(h),
+                inv_half: Vector3::repeat(1.0 / h),
                 core,
+                inv_band: 1.0 / (1.0 - core),
                 function: fit.function,
                 role,
                 support_points: n as u32,

@@ -9,13 +9,18 @@
 //! This is where `fit` spends most of its time (every evaluation of the partition-of-unity
 //! implicit sums two or three RBFs of about 60 centres: one `ln` per centre), so the centres
 //! are stored as four coordinate arrays padded to a multiple of [`LANES`] and summed
-//! lane-parallel with a branch-free `ln` ([`ln`]) the compiler vectorizes; on x86-64 with AVX2
-//! the same code is compiled a second time for 4-wide registers and chosen at run time.
+//! lane-parallel with a branch-free `ln` ([`ln`]). On x86-64 with AVX2 and FMA the sums run on
+//! 4-wide registers through explicit intrinsics ([`avx2`]); elsewhere a portable build performs
+//! the same operations one lane at a time.
 //!
-//! **Determinism.** Both builds perform the same IEEE operations in the same order (four
-//! partial sums, one per lane, added as (s0 + s1) + (s2 + s3); no fused multiply-add, which
-//! Rust never contracts implicitly), so results are bit-identical with and without AVX2 and
-//! the STEP and IGES files stay byte-identical across machines.
+//! **Determinism.** Both builds perform the same IEEE operations in the same order: four
+//! partial sums, one per lane, added as (s0 + s1) + (s2 + s3), and the same fused
+//! multiply-adds (`f64::mul_add` in the portable build, correctly rounded on every platform,
+//! in hardware or by libm), so results are bit-identical with and without AVX2 and the STEP
+//! and IGES files stay byte-identical across machines. The `ln` polynomial is evaluated by
+//! Estrin's scheme (independent products, a short dependency chain) rather than Horner's:
+//! with the fused multiply-adds the bunny's kernel sums take 27 % less time per centre
+//! (docs/BENCHMARKS.md, session 10).
 //!
 //! Hand-written rather than a crate: the SIMD math crates either need nightly (`std::simd`)
 //! or return a different `ln` per instruction set, which would break the determinism above.
@@ -32,6 +37,13 @@ pub struct Centres {
     z: Vec<f64>,
     lambda: Vec<f64>,
     len: usize,
+}
+
+/// Whether this CPU runs the [`avx2`] build (AVX2 and FMA; std caches the answer).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn has_avx2_fma() -> bool {
+    std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma")
 }
 
 impl Centres {
@@ -80,9 +92,9 @@ impl Centres {
     /// The kernel sum s(y) (module doc).
     pub fn value(&self, y: [f64; 3]) -> f64 {
         #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            return unsafe { value_avx2(self, y) };
+        if has_avx2_fma() {
+            // SAFETY: the CPU supports AVX2 and FMA (checked just above).
+            return unsafe { avx2::value(self, y) };
         }
         value_lanes(self, y)
     }
@@ -90,9 +102,9 @@ impl Centres {
     /// The kernel sum s(y) and its gradient (module doc).
     pub fn value_and_gradient(&self, y: [f64; 3]) -> (f64, [f64; 3]) {
         #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            return unsafe { value_and_gradient_avx2(self, y) };
+        if has_avx2_fma() {
+            // SAFETY: the CPU supports AVX2 and FMA (checked just above).
+            return unsafe { avx2::value_and_gradient(self, y) };
         }
         value_and_gradient_lanes(self, y)
     }
@@ -102,39 +114,32 @@ impl Centres {
 /// centres with coordinates `x[i], y[i], z[i]`, vectorized like the sums; 0 where c_i = y.
 pub fn phi_column(cx: &[f64], cy: &[f64], cz: &[f64], y: [f64; 3], out: &mut [f64]) {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2 (checked just above).
-        return unsafe { phi_column_avx2(cx, cy, cz, y, out) };
+    if has_avx2_fma() {
+        // SAFETY: the CPU supports AVX2 and FMA (checked just above).
+        return unsafe { avx2::phi_column(cx, cy, cz, y, out) };
     }
     phi_column_lanes(cx, cy, cz, y, out)
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn phi_column_avx2(cx: &[f64], cy: &[f64], cz: &[f64], y: [f64; 3], out: &mut [f64]) {
-    phi_column_lanes(cx, cy, cz, y, out)
+/// Squared distance |(dx, dy, dz)|^2 = fma(dx, dx, fma(dy, dy, dz dz)) as the kernel forms it.
+#[inline(always)]
+fn dist2(dx: f64, dy: f64, dz: f64) -> f64 {
+    dx.mul_add(dx, dy.mul_add(dy, dz * dz))
+}
+
+/// phi(r) = 0.5 r^2 ln(r^2) of a squared distance r2 > 0, as the kernel forms it.
+#[inline(always)]
+fn phi_of(r2: f64, lr: f64) -> f64 {
+    0.5 * r2 * lr
 }
 
 #[inline(always)]
 fn phi_column_lanes(cx: &[f64], cy: &[f64], cz: &[f64], y: [f64; 3], out: &mut [f64]) {
     for (((o, &x0), &y0), &z0) in out.iter_mut().zip(cx).zip(cy).zip(cz) {
-        let (dx, dy, dz) = (y[0] - x0, y[1] - y0, y[2] - z0);
-        let r2 = dx * dx + dy * dy + dz * dz;
-        let v = 0.5 * r2 * ln(r2.max(f64::MIN_POSITIVE));
+        let r2 = dist2(y[0] - x0, y[1] - y0, y[2] - z0);
+        let v = phi_of(r2, ln(r2.max(f64::MIN_POSITIVE)));
         *o = if r2 > 0.0 { v } else { 0.0 };
     }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn value_avx2(c: &Centres, y: [f64; 3]) -> f64 {
-    value_lanes(c, y)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn value_and_gradient_avx2(c: &Centres, y: [f64; 3]) -> (f64, [f64; 3]) {
-    value_and_gradient_lanes(c, y)
 }
 
 /// Squared distance, kept above the smallest normal number so that `ln` stays finite; a
@@ -142,7 +147,7 @@ unsafe fn value_and_gradient_avx2(c: &Centres, y: [f64; 3]) -> (f64, [f64; 3]) {
 /// rounding of a non-zero sum) and exactly 0 to the gradient (y - c = 0).
 #[inline(always)]
 fn r2_of(dx: f64, dy: f64, dz: f64) -> f64 {
-    (dx * dx + dy * dy + dz * dz).max(f64::MIN_POSITIVE)
+    dist2(dx, dy, dz).max(f64::MIN_POSITIVE)
 }
 
 #[inline(always)]
@@ -150,19 +155,17 @@ fn reduce(s: [f64; LANES]) -> f64 {
     (s[0] + s[1]) + (s[2] + s[3])
 }
 
-#[inline(always)]
 fn value_lanes(c: &Centres, y: [f64; 3]) -> f64 {
     let mut s = [0.0; LANES];
     for (cx, cy, cz, l) in c.blocks() {
         for k in 0..LANES {
             let r2 = r2_of(y[0] - cx[k], y[1] - cy[k], y[2] - cz[k]);
-            s[k] += l[k] * (0.5 * r2 * ln(r2));
+            s[k] = l[k].mul_add(phi_of(r2, ln(r2)), s[k]);
         }
     }
     reduce(s)
 }
 
-#[inline(always)]
 fn value_and_gradient_lanes(c: &Centres, y: [f64; 3]) -> (f64, [f64; 3]) {
     let mut s = [0.0; LANES];
     let mut gx = [0.0; LANES];
@@ -173,11 +176,11 @@ fn value_and_gradient_lanes(c: &Centres, y: [f64; 3]) -> (f64, [f64; 3]) {
             let (dx, dy, dz) = (y[0] - cx[k], y[1] - cy[k], y[2] - cz[k]);
             let r2 = r2_of(dx, dy, dz);
             let lr = ln(r2);
-            s[k] += l[k] * (0.5 * r2 * lr);
+            s[k] = l[k].mul_add(phi_of(r2, lr), s[k]);
             let t = l[k] * (lr + 1.0);
-            gx[k] += dx * t;
-            gy[k] += dy * t;
-            gz[k] += dz * t;
+            gx[k] = dx.mul_add(t, gx[k]);
+            gy[k] = dy.mul_add(t, gy[k]);
+            gz[k] = dz.mul_add(t, gz[k]);
         }
     }
     (reduce(s), [reduce(gx), reduce(gy), reduce(gz)])
@@ -190,18 +193,30 @@ const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
 const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
 /// 2^52 + 1023: (2^52 + biased exponent) - this = unbiased exponent, exactly.
 const EXP_MAGIC: f64 = 4_503_599_627_371_519.0;
+/// Coefficients 2 / (2k + 1), k = 1..9, of the atanh series below.
+const C3: f64 = 2.0 / 3.0;
+const C5: f64 = 2.0 / 5.0;
+const C7: f64 = 2.0 / 7.0;
+const C9: f64 = 2.0 / 9.0;
+const C11: f64 = 2.0 / 11.0;
+const C13: f64 = 2.0 / 13.0;
+const C15: f64 = 2.0 / 15.0;
+const C17: f64 = 2.0 / 17.0;
+const C19: f64 = 2.0 / 19.0;
 
-/// Natural logarithm of a positive normal double, branch-free (vectorizable), within 2 ulp of
-/// `f64::ln` (tested below).
+/// Natural logarithm of a positive normal double, branch-free, within 2 ulp of `f64::ln`
+/// (tested below).
 ///
 /// ```text
 /// x = m 2^e,  m in [sqrt(1/2), sqrt(2)),  s = (m - 1) / (m + 1),  |s| <= 0.172
-/// ln x = e ln 2 + 2 atanh(s) = e ln 2 + 2 s (1 + s^2/3 + s^4/5 + ... + s^18/19)
+/// ln x = e ln 2 + 2 atanh(s) = e ln 2 + 2 s + s z P(z),  z = s^2,
+/// P(z) = 2/3 + 2/5 z + ... + 2/19 z^8   (Estrin: pairs, then pairs of pairs)
 /// ```
 ///
 /// The series is cut after s^19: the next term is below 2.4e-17 of the sum. Zero, negative,
 /// subnormal, infinite or NaN arguments give unspecified finite or NaN results (the callers
-/// pass r^2 clamped to the smallest normal number).
+/// pass r^2 clamped to the smallest normal number). [`avx2::ln`] is the same sequence of
+/// operations on four lanes.
 #[inline(always)]
 pub fn ln(x: f64) -> f64 {
     let bits = x.to_bits();
@@ -212,17 +227,198 @@ pub fn ln(x: f64) -> f64 {
     let e = f64::from_bits(0x4330_0000_0000_0000 | eb) - EXP_MAGIC;
     let s = (m - 1.0) / (m + 1.0);
     let z = s * s;
-    let p = 2.0 / 19.0;
-    let p = p * z + 2.0 / 17.0;
-    let p = p * z + 2.0 / 15.0;
-    let p = p * z + 2.0 / 13.0;
-    let p = p * z + 2.0 / 11.0;
-    let p = p * z + 2.0 / 9.0;
-    let p = p * z + 2.0 / 7.0;
-    let p = p * z + 2.0 / 5.0;
-    let p = p * z + 2.0 / 3.0;
+    let z2 = z * z;
+    let z4 = z2 * z2;
+    let z8 = z4 * z4;
+    let a0 = z.mul_add(C5, C3);
+    let a1 = z.mul_add(C9, C7);
+    let a2 = z.mul_add(C13, C11);
+    let a3 = z.mul_add(C17, C15);
+    let b0 = z2.mul_add(a1, a0);
+    let b1 = z2.mul_add(a3, a2);
+    let c0 = z4.mul_add(b1, b0);
+    let p = z8.mul_add(C19, c0);
     let r = s * z * p;
-    e * LN2_HI + ((e * LN2_LO + r) + 2.0 * s)
+    e.mul_add(LN2_HI, e.mul_add(LN2_LO, r) + (s + s))
+}
+
+/// The kernel on 4-wide AVX2 registers with fused multiply-adds: the portable functions above,
+/// operation for operation (module doc: determinism).
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::*;
+    use std::arch::x86_64::*;
+
+    /// [`super::ln`] of four lanes.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn ln(x: __m256d) -> __m256d {
+        let c = |v: f64| _mm256_set1_pd(v);
+        let bits = _mm256_castpd_si256(x);
+        let m1 = _mm256_or_pd(
+            _mm256_and_pd(
+                x,
+                _mm256_castsi256_pd(_mm256_set1_epi64x(0x000f_ffff_ffff_ffff)),
+            ),
+            _mm256_castsi256_pd(_mm256_set1_epi64x(0x3ff0_0000_0000_0000)),
+        );
+        let big = _mm256_cmp_pd::<_CMP_GE_OQ>(m1, c(SQRT_2));
+        let m = _mm256_blendv_pd(m1, _mm256_mul_pd(c(0.5), m1), big);
+        // big is all ones (-1) where set: subtracting it adds 1 to the biased exponent.
+        let eb = _mm256_sub_epi64(_mm256_srli_epi64::<52>(bits), _mm256_castpd_si256(big));
+        let e = _mm256_sub_pd(
+            _mm256_castsi256_pd(_mm256_or_si256(
+                _mm256_set1_epi64x(0x4330_0000_0000_0000),
+                eb,
+            )),
+            c(EXP_MAGIC),
+        );
+        let one = c(1.0);
+        let s = _mm256_div_pd(_mm256_sub_pd(m, one), _mm256_add_pd(m, one));
+        let z = _mm256_mul_pd(s, s);
+        let z2 = _mm256_mul_pd(z, z);
+        let z4 = _mm256_mul_pd(z2, z2);
+        let z8 = _mm256_mul_pd(z4, z4);
+        let a0 = _mm256_fmadd_pd(z, c(C5), c(C3));
+        let a1 = _mm256_fmadd_pd(z, c(C9), c(C7));
+        let a2 = _mm256_fmadd_pd(z, c(C13), c(C11));
+        let a3 = _mm256_fmadd_pd(z, c(C17), c(C15));
+        let b0 = _mm256_fmadd_pd(z2, a1, a0);
+        let b1 = _mm256_fmadd_pd(z2, a3, a2);
+        let c0 = _mm256_fmadd_pd(z4, b1, b0);
+        let p = _mm256_fmadd_pd(z8, c(C19), c0);
+        let r = _mm256_mul_pd(_mm256_mul_pd(s, z), p);
+        _mm256_fmadd_pd(
+            e,
+            c(LN2_HI),
+            _mm256_add_pd(_mm256_fmadd_pd(e, c(LN2_LO), r), _mm256_add_pd(s, s)),
+        )
+    }
+
+    /// y in all lanes, per coordinate.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn splat3(y: [f64; 3]) -> [__m256d; 3] {
+        [
+            _mm256_set1_pd(y[0]),
+            _mm256_set1_pd(y[1]),
+            _mm256_set1_pd(y[2]),
+        ]
+    }
+
+    /// [`super::dist2`] of four lanes.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn dist2(dx: __m256d, dy: __m256d, dz: __m256d) -> __m256d {
+        _mm256_fmadd_pd(dx, dx, _mm256_fmadd_pd(dy, dy, _mm256_mul_pd(dz, dz)))
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn reduce(v: __m256d) -> f64 {
+        let mut a = [0.0; LANES];
+        // SAFETY: `a` holds four doubles; unaligned store.
+        unsafe { _mm256_storeu_pd(a.as_mut_ptr(), v) };
+        super::reduce(a)
+    }
+
+    /// Lane differences y - c of block `i` (four centres from index 4 i).
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn deltas(c: &Centres, i: usize, y: &[__m256d; 3]) -> [__m256d; 4] {
+        let at = |v: &[f64]| -> __m256d {
+            let b: &[f64; LANES] = v[i * LANES..(i + 1) * LANES]
+                .try_into()
+                .unwrap_or_else(|_| unreachable!("blocks of LANES"));
+            // SAFETY: `b` is four readable doubles; unaligned load.
+            unsafe { _mm256_loadu_pd(b.as_ptr()) }
+        };
+        [
+            _mm256_sub_pd(y[0], at(&c.x)),
+            _mm256_sub_pd(y[1], at(&c.y)),
+            _mm256_sub_pd(y[2], at(&c.z)),
+            at(&c.lambda),
+        ]
+    }
+
+    /// [`super::value_lanes`].
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn value(c: &Centres, y: [f64; 3]) -> f64 {
+        let yv = splat3(y);
+        let (half, tiny) = (_mm256_set1_pd(0.5), _mm256_set1_pd(f64::MIN_POSITIVE));
+        let mut s = _mm256_setzero_pd();
+        for i in 0..c.x.len() / LANES {
+            let [dx, dy, dz, l] = deltas(c, i, &yv);
+            let r2 = _mm256_max_pd(dist2(dx, dy, dz), tiny);
+            let phi = _mm256_mul_pd(_mm256_mul_pd(half, r2), ln(r2));
+            s = _mm256_fmadd_pd(l, phi, s);
+        }
+        reduce(s)
+    }
+
+    /// [`super::value_and_gradient_lanes`].
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn value_and_gradient(c: &Centres, y: [f64; 3]) -> (f64, [f64; 3]) {
+        let yv = splat3(y);
+        let (half, one) = (_mm256_set1_pd(0.5), _mm256_set1_pd(1.0));
+        let tiny = _mm256_set1_pd(f64::MIN_POSITIVE);
+        let (mut s, mut gx, mut gy, mut gz) = (
+            _mm256_setzero_pd(),
+            _mm256_setzero_pd(),
+            _mm256_setzero_pd(),
+            _mm256_setzero_pd(),
+        );
+        for i in 0..c.x.len() / LANES {
+            let [dx, dy, dz, l] = deltas(c, i, &yv);
+            let r2 = _mm256_max_pd(dist2(dx, dy, dz), tiny);
+            let lr = ln(r2);
+            s = _mm256_fmadd_pd(l, _mm256_mul_pd(_mm256_mul_pd(half, r2), lr), s);
+            let t = _mm256_mul_pd(l, _mm256_add_pd(lr, one));
+            gx = _mm256_fmadd_pd(dx, t, gx);
+            gy = _mm256_fmadd_pd(dy, t, gy);
+            gz = _mm256_fmadd_pd(dz, t, gz);
+        }
+        (reduce(s), [reduce(gx), reduce(gy), reduce(gz)])
+    }
+
+    /// [`super::phi_column_lanes`]: whole blocks of four here, the rest one lane at a time by
+    /// the portable code (the same operations).
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) fn phi_column(cx: &[f64], cy: &[f64], cz: &[f64], y: [f64; 3], out: &mut [f64]) {
+        let n = out.len().min(cx.len()).min(cy.len()).min(cz.len());
+        let full = n / LANES * LANES;
+        let yv = splat3(y);
+        let (half, tiny) = (_mm256_set1_pd(0.5), _mm256_set1_pd(f64::MIN_POSITIVE));
+        let zero = _mm256_setzero_pd();
+        let load = |v: &[f64], i: usize| -> __m256d {
+            let b: &[f64; LANES] = v[i..i + LANES]
+                .try_into()
+                .unwrap_or_else(|_| unreachable!("blocks of LANES"));
+            // SAFETY: `b` is four readable doubles; unaligned load.
+            unsafe { _mm256_loadu_pd(b.as_ptr()) }
+        };
+        for i in (0..full).step_by(LANES) {
+            let dx = _mm256_sub_pd(yv[0], load(cx, i));
+            let dy = _mm256_sub_pd(yv[1], load(cy, i));
+            let dz = _mm256_sub_pd(yv[2], load(cz, i));
+            let r2 = dist2(dx, dy, dz);
+            let v = _mm256_mul_pd(_mm256_mul_pd(half, r2), ln(_mm256_max_pd(r2, tiny)));
+            // 0 where r2 = 0 (the centre itself).
+            let v = _mm256_and_pd(v, _mm256_cmp_pd::<_CMP_GT_OQ>(r2, zero));
+            let o: &mut [f64; LANES] = (&mut out[i..i + LANES])
+                .try_into()
+                .unwrap_or_else(|_| unreachable!("blocks of LANES"));
+            // SAFETY: `o` is four writable doubles; unaligned store.
+            unsafe { _mm256_storeu_pd(o.as_mut_ptr(), v) };
+        }
+        super::phi_column_lanes(
+            &cx[full..n],
+            &cy[full..n],
+            &cz[full..n],
+            y,
+            &mut out[full..n],
+        );
+    }
 }
 
 #[cfg(test)]

@@ -104,7 +104,9 @@ impl BoxIndex {
 
     /// Indices (ascending) of the points p with |p_k - c_k| <= h on every axis k.
     pub fn within_box(&self, c: &Point3<f64>, h: f64) -> Vec<usize> {
-        let mut out = Vec::new();
+        // Room for a typical cell's support without regrowing (the implicit's cells hold up
+        // to a few hundred points; growing from empty was 2 % of `fit`).
+        let mut out = Vec::with_capacity(256);
         if h.is_nan() || h < 0.0 || self.pts.is_empty() {
             return out;
         }
@@ -114,7 +116,8 @@ impl BoxIndex {
                 n.min[k] + n.edge + self.slack < c[k] - h || n.min[k] - self.slack > c[k] + h
             })
         };
-        let mut stack = vec![0u32];
+        let mut stack = Vec::with_capacity(64);
+        stack.push(0u32);
         while let Some(i) = stack.pop() {
             let n = &self.nodes[i as usize];
             if misses(n) {
