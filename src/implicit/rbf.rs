@@ -108,26 +108,19 @@ impl ThinPlateRbf {
         let mut a = Mat::<f64>::zeros(m, m);
         let coord = |k: usize| -> Vec<f64> { xs.iter().map(|x| x[k]).collect() };
         let (cx, cy, cz) = (coord(0), coord(1), coord(2));
-        // A, column-major: column j from the diagonal down by the vectorized kernel, mirrored
-        // into row j ((x_i - x_j)^2 = (x_j - x_i)^2 exactly, so this is the whole matrix for
-        // half the logarithms).
-        let mut phi = vec![0.0; n * n];
+        // A in the system matrix's own column-major storage: column j from the diagonal down
+        // by the vectorized kernel, mirrored into row j ((x_i - x_j)^2 = (x_j - x_i)^2
+        // exactly, so this is the whole matrix for half the logarithms).
         for j in 0..n {
-            let below = &mut phi[j * n + j..(j + 1) * n];
             phi_column(
                 &cx[j..],
                 &cy[j..],
                 &cz[j..],
                 [xs[j].x, xs[j].y, xs[j].z],
-                below,
+                &mut a.col_as_slice_mut(j)[j..n],
             );
-            for k in 1..n - j {
-                phi[(j + k) * n + j] = phi[j * n + j + k];
-            }
-        }
-        for (j, col) in phi.chunks_exact(n).enumerate() {
-            for (i, &v) in col.iter().enumerate() {
-                a[(i, j)] = v;
+            for i in j + 1..n {
+                a[(j, i)] = a[(i, j)];
             }
         }
         for i in 0..n {
@@ -157,8 +150,9 @@ impl ThinPlateRbf {
         let p = Vector3::new(x[(n + 1, 0)], x[(n + 2, 0)], x[(n + 3, 0)]);
         let at_centres = (0..at)
             .map(|i| {
-                // Row i of A is column i (symmetric), contiguous.
-                let row = &phi[i * n..(i + 1) * n];
+                // Row i of A is column i (symmetric), contiguous; the factorization worked on
+                // its own copy.
+                let row = &a.col_as_slice(i)[..n];
                 let (mut gx, mut gy, mut gz) = (0.0, 0.0, 0.0);
                 for j in 0..n {
                     let (dx, dy, dz) = (cx[i] - cx[j], cy[i] - cy[j], cz[i] - cz[j]);
