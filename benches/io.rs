@@ -4,21 +4,13 @@
 //!
 //! Prints the best of five reads. Figures go to docs/BENCHMARKS.md.
 
+mod common;
+use common::best_of;
 use nalgebra::{Point3, Vector3};
 use scansurf::io::{read_mesh, write_mesh, WriteOptions};
 use scansurf::Mesh;
 use std::path::Path;
 use std::time::Instant;
-
-fn best_of<F: FnMut()>(n: usize, mut f: F) -> f64 {
-    (0..n)
-        .map(|_| {
-            let t = Instant::now();
-            f();
-            t.elapsed().as_secs_f64()
-        })
-        .fold(f64::INFINITY, f64::min)
-}
 
 fn main() {
     let dir = tempfile::tempdir().expect("temp dir");

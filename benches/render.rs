@@ -6,6 +6,8 @@
 //! Prints the best of five renders (PNG encoding timed separately). Figures go to
 //! docs/BENCHMARKS.md.
 
+mod common;
+use common::best_of;
 use nalgebra::Point3;
 use scansurf::io::read_mesh;
 use scansurf::render::{render_mesh, RenderOptions};
@@ -13,16 +15,6 @@ use scansurf::Mesh;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-fn best_of<F: FnMut()>(n: usize, mut f: F) -> f64 {
-    (0..n)
-        .map(|_| {
-            let t = Instant::now();
-            f();
-            t.elapsed().as_secs_f64()
-        })
-        .fold(f64::INFINITY, f64::min)
-}
 
 /// A bumpy UV sphere with exactly `2 nu nv` triangles.
 fn bumpy_sphere(nu: usize, nv: usize) -> Mesh {
