@@ -202,9 +202,8 @@ pub struct PouImplicit {
     diagonal: f64,
     /// Typical point spacing (see `sample_spacing`).
     spacing: f64,
-    /// Per octree node (indexed by node; only terminal nodes filled), the `DENSE_PROBE` points
-    /// nearest to the cell's centre (`u32::MAX` when none): `dense`'s first try.
-    probes: Vec<[u32; DENSE_PROBE]>,
+    /// `dense`'s first try, [`DensityProbes`].
+    probes: DensityProbes,
     stats: FitStats,
 }
 
@@ -255,7 +254,7 @@ fn density_base(d2: f64, r2: f64) -> f64 {
 /// The `DENSE_PROBE` points nearest to the centre of each terminal octree cell not much larger
 /// than the density radius `r` (larger cells get none: from most of such a cell the points
 /// nearest its centre are too far to count), for `PouImplicit::dense`.
-fn density_probes<T: Send>(tree: &Octree<T>, kd: &KdTree, r: f64) -> Vec<[u32; DENSE_PROBE]> {
+fn density_probes<T: Send>(tree: &Octree<T>, kd: &KdTree, r: f64) -> DensityProbes {
     use rayon::prelude::*;
     let cells: Vec<(usize, Cube)> = tree.terminal_nodes().collect();
     let found: Vec<(usize, [u32; DENSE_PROBE])> = cells
@@ -269,11 +268,30 @@ fn density_probes<T: Send>(tree: &Octree<T>, kd: &KdTree, r: f64) -> Vec<[u32; D
             (*ni, probe)
         })
         .collect();
-    let mut probes = vec![[u32::MAX; DENSE_PROBE]; tree.node_count()];
+    let mut slot = vec![u32::MAX; tree.node_count()];
+    let mut probes = Vec::with_capacity(found.len());
     for (ni, probe) in found {
-        probes[ni] = probe;
+        slot[ni] = probes.len() as u32;
+        probes.push(probe);
     }
-    probes
+    DensityProbes { slot, probes }
+}
+
+/// Per terminal octree cell, the `DENSE_PROBE` points nearest to its centre (`u32::MAX` where
+/// fewer exist): a slot per octree node (inner nodes and cells without probes: `u32::MAX`)
+/// into the probe sets of the cells that have them.
+#[derive(Debug)]
+struct DensityProbes {
+    slot: Vec<u32>,
+    probes: Vec<[u32; DENSE_PROBE]>,
+}
+
+impl DensityProbes {
+    /// The probe points of octree node `node`, if it has any.
+    fn of(&self, node: usize) -> Option<&[u32; DENSE_PROBE]> {
+        let k = *self.slot.get(node)?;
+        self.probes.get(k as usize)
+    }
 }
 
 /// Median over up to 2000 strided points of the distance to the 8th nearest neighbour divided by
@@ -545,7 +563,7 @@ impl PouImplicit {
             u * u * u
         };
         let full = DENSITY_FULL * DENSE_MARGIN;
-        if let Some(probe) = node.and_then(|n| self.probes.get(n)) {
+        if let Some(probe) = node.and_then(|n| self.probes.of(n)) {
             let rho: f64 = probe
                 .iter()
                 .filter(|&&i| i != u32::MAX)
