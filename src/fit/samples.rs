@@ -990,6 +990,17 @@ mod tests {
         v.net
     }
 
+    /// A torus (radii 1 and 0.35), its box and its smoothed net at voxel size 0.15.
+    fn torus_net() -> (Torus, Aabb, QuadNet) {
+        let t = Torus {
+            big: 1.0,
+            small: 0.35,
+        };
+        let b = aabb([-1.35, -1.35, -0.35], [1.35, 1.35, 0.35]);
+        let net = net_on(&t, &seeds_on(&t, Point3::origin(), 1.4, 40), &b, 0.15);
+        (t, b, net)
+    }
+
     /// The data that fixes a side's boundary curve, in the edge's canonical direction:
     /// points, parameters, derivative at the lower node, derivative at the higher node.
     type Boundary = (Vec<Point3<f64>>, Vec<f64>, Vector3<f64>, Vector3<f64>);
@@ -1128,12 +1139,7 @@ mod tests {
     /// with the trial's count as minimum gives; a start of another net is ignored.
     #[test]
     fn a_given_first_round_is_the_first_round() {
-        let t = Torus {
-            big: 1.0,
-            small: 0.35,
-        };
-        let b = aabb([-1.35, -1.35, -0.35], [1.35, 1.35, 0.35]);
-        let net = net_on(&t, &seeds_on(&t, Point3::origin(), 1.4, 40), &b, 0.15);
+        let (t, b, net) = torus_net();
         // Tighter than four intervals per side meet (about 1e-7 of the diagonal), so that
         // refinement goes on from the start.
         let tol = 2e-8 * b.diagonal();
@@ -1182,12 +1188,7 @@ mod tests {
         let again = sample_patches(&net, &s, &SampleOptions::new(tol, b.diagonal())).unwrap();
         assert_eq!(again.patches, ps.patches);
 
-        let t = Torus {
-            big: 1.0,
-            small: 0.35,
-        };
-        let b = aabb([-1.35, -1.35, -0.35], [1.35, 1.35, 0.35]);
-        let net = net_on(&t, &seeds_on(&t, Point3::origin(), 1.4, 40), &b, 0.15);
+        let (t, b, net) = torus_net();
         let tol = 1e-4 * b.diagonal();
         let ps = sample_patches(&net, &t, &SampleOptions::new(tol, b.diagonal())).unwrap();
         check_network("torus", &t, &net, &ps, b.diagonal());
