@@ -322,22 +322,34 @@ mod avx2 {
         super::reduce(a)
     }
 
-    /// Lane differences y - c of block `i` (four centres from index 4 i).
+    /// [`super::phi_of`] of four lanes.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn phi_of(r2: __m256d, lr: __m256d) -> __m256d {
+        _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(0.5), r2), lr)
+    }
+
+    /// `v[i..i + 4]` in one register (callers pass whole blocks).
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn load4(v: &[f64], i: usize) -> __m256d {
+        let b: &[f64; LANES] = v[i..i + LANES]
+            .try_into()
+            .unwrap_or_else(|_| unreachable!("blocks of LANES"));
+        // SAFETY: `b` is four readable doubles; unaligned load.
+        unsafe { _mm256_loadu_pd(b.as_ptr()) }
+    }
+
+    /// Lane differences y - c of block `i` (four centres from index 4 i), and their weights.
     #[inline]
     #[target_feature(enable = "avx2,fma")]
     fn deltas(c: &Centres, i: usize, y: &[__m256d; 3]) -> [__m256d; 4] {
-        let at = |v: &[f64]| -> __m256d {
-            let b: &[f64; LANES] = v[i * LANES..(i + 1) * LANES]
-                .try_into()
-                .unwrap_or_else(|_| unreachable!("blocks of LANES"));
-            // SAFETY: `b` is four readable doubles; unaligned load.
-            unsafe { _mm256_loadu_pd(b.as_ptr()) }
-        };
+        let k = i * LANES;
         [
-            _mm256_sub_pd(y[0], at(&c.x)),
-            _mm256_sub_pd(y[1], at(&c.y)),
-            _mm256_sub_pd(y[2], at(&c.z)),
-            at(&c.lambda),
+            _mm256_sub_pd(y[0], load4(&c.x, k)),
+            _mm256_sub_pd(y[1], load4(&c.y, k)),
+            _mm256_sub_pd(y[2], load4(&c.z, k)),
+            load4(&c.lambda, k),
         ]
     }
 
@@ -345,13 +357,12 @@ mod avx2 {
     #[target_feature(enable = "avx2,fma")]
     pub(super) fn value(c: &Centres, y: [f64; 3]) -> f64 {
         let yv = splat3(y);
-        let (half, tiny) = (_mm256_set1_pd(0.5), _mm256_set1_pd(f64::MIN_POSITIVE));
+        let tiny = _mm256_set1_pd(f64::MIN_POSITIVE);
         let mut s = _mm256_setzero_pd();
         for i in 0..c.x.len() / LANES {
             let [dx, dy, dz, l] = deltas(c, i, &yv);
             let r2 = _mm256_max_pd(dist2(dx, dy, dz), tiny);
-            let phi = _mm256_mul_pd(_mm256_mul_pd(half, r2), ln(r2));
-            s = _mm256_fmadd_pd(l, phi, s);
+            s = _mm256_fmadd_pd(l, phi_of(r2, ln(r2)), s);
         }
         reduce(s)
     }
@@ -360,8 +371,7 @@ mod avx2 {
     #[target_feature(enable = "avx2,fma")]
     pub(super) fn value_and_gradient(c: &Centres, y: [f64; 3]) -> (f64, [f64; 3]) {
         let yv = splat3(y);
-        let (half, one) = (_mm256_set1_pd(0.5), _mm256_set1_pd(1.0));
-        let tiny = _mm256_set1_pd(f64::MIN_POSITIVE);
+        let (one, tiny) = (_mm256_set1_pd(1.0), _mm256_set1_pd(f64::MIN_POSITIVE));
         let (mut s, mut gx, mut gy, mut gz) = (
             _mm256_setzero_pd(),
             _mm256_setzero_pd(),
@@ -372,7 +382,7 @@ mod avx2 {
             let [dx, dy, dz, l] = deltas(c, i, &yv);
             let r2 = _mm256_max_pd(dist2(dx, dy, dz), tiny);
             let lr = ln(r2);
-            s = _mm256_fmadd_pd(l, _mm256_mul_pd(_mm256_mul_pd(half, r2), lr), s);
+            s = _mm256_fmadd_pd(l, phi_of(r2, lr), s);
             let t = _mm256_mul_pd(l, _mm256_add_pd(lr, one));
             gx = _mm256_fmadd_pd(dx, t, gx);
             gy = _mm256_fmadd_pd(dy, t, gy);
@@ -388,21 +398,13 @@ mod avx2 {
         let n = out.len().min(cx.len()).min(cy.len()).min(cz.len());
         let full = n / LANES * LANES;
         let yv = splat3(y);
-        let (half, tiny) = (_mm256_set1_pd(0.5), _mm256_set1_pd(f64::MIN_POSITIVE));
-        let zero = _mm256_setzero_pd();
-        let load = |v: &[f64], i: usize| -> __m256d {
-            let b: &[f64; LANES] = v[i..i + LANES]
-                .try_into()
-                .unwrap_or_else(|_| unreachable!("blocks of LANES"));
-            // SAFETY: `b` is four readable doubles; unaligned load.
-            unsafe { _mm256_loadu_pd(b.as_ptr()) }
-        };
+        let (tiny, zero) = (_mm256_set1_pd(f64::MIN_POSITIVE), _mm256_setzero_pd());
         for i in (0..full).step_by(LANES) {
-            let dx = _mm256_sub_pd(yv[0], load(cx, i));
-            let dy = _mm256_sub_pd(yv[1], load(cy, i));
-            let dz = _mm256_sub_pd(yv[2], load(cz, i));
+            let dx = _mm256_sub_pd(yv[0], load4(cx, i));
+            let dy = _mm256_sub_pd(yv[1], load4(cy, i));
+            let dz = _mm256_sub_pd(yv[2], load4(cz, i));
             let r2 = dist2(dx, dy, dz);
-            let v = _mm256_mul_pd(_mm256_mul_pd(half, r2), ln(_mm256_max_pd(r2, tiny)));
+            let v = phi_of(r2, ln(_mm256_max_pd(r2, tiny)));
             // 0 where r2 = 0 (the centre itself).
             let v = _mm256_and_pd(v, _mm256_cmp_pd::<_CMP_GT_OQ>(r2, zero));
             let o: &mut [f64; LANES] = (&mut out[i..i + LANES])
