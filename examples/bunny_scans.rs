@@ -4,7 +4,7 @@
 //!
 //!     cargo run --release --example bunny_scans -- ../shared/data/stanford-bunny.obj /tmp/guide
 
-#[path = "../tests/support/scanner_writers.rs"]
+#[path = "../tests/it/support/scanner_writers.rs"]
 mod scanner_writers;
 
 use scansurf::io::read_mesh;

@@ -1,6 +1,6 @@
 //! Writes the hostile-input corpus `tests/bad_inputs/` (run from the repository root:
 //! `cargo run --release --example gen_bad_inputs`). Every file is small and deterministic; the
-//! integration test `tests/bad_inputs.rs` runs every subcommand on every file. Regenerating
+//! integration test `tests/it/bad_inputs.rs` runs every subcommand on every file. Regenerating
 //! rewrites the whole directory, so edit this program, not the files.
 
 use std::fmt::Write as _;

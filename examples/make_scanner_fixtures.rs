@@ -9,7 +9,7 @@
 //!
 //! The files are written by the `e57` and `las` crates' own writers (scansurf only reads them).
 
-#[path = "../tests/support/scanner_writers.rs"]
+#[path = "../tests/it/support/scanner_writers.rs"]
 mod scanner_writers;
 
 use scansurf::io::read_mesh;

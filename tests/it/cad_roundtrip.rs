@@ -10,8 +10,7 @@
 //! The checks need a Python with OpenCASCADE (`.venv-check` in the repository, or
 //! /work/main/.venv-check); without one the tests print why and return.
 
-mod common;
-use common::{cad_check, checker};
+use crate::common::{cad_check, checker};
 
 use nalgebra::{Matrix3, Point3, Vector3};
 use scansurf::export::{iges_string, step_string, ExportOptions, Timestamp};

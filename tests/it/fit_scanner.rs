@@ -8,8 +8,8 @@
 //! per fit; OpenCASCADE on the E57 result: valid, closed, 148 B-spline faces, deviation mean
 //! 1.35e-4 of the diagonal.
 
-mod common;
-use common::{fit_report as fit, json_f64 as f};
+use crate::common;
+use crate::common::{fit_report as fit, json_f64 as f};
 
 use std::path::PathBuf;
 

@@ -1,14 +1,14 @@
 //! Round trips through the scanner formats: files written by the `e57` and `las` crates'
 //! writers read back through `io::read_mesh` with the same point count and bounds.
 
-mod support;
+use crate::support;
 
+use crate::support::scanner_writers::{write_e57_two_scans, write_las};
 use nalgebra::Point3;
 use scansurf::io::{read_mesh, scan_info, ScanInfo};
 use scansurf::mesh::subsample::{limit_points, voxel_grid};
 use scansurf::mesh::Aabb;
 use std::path::{Path, PathBuf};
-use support::scanner_writers::{write_e57_two_scans, write_las};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

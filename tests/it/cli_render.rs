@@ -1,9 +1,8 @@
 //! `scansurf render` and `inspect` on scanner files, through the binary.
 
+use crate::common::run;
 use scansurf::render::Image;
 use std::path::Path;
-mod common;
-use common::run;
 
 fn fixture(n: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -1,9 +1,8 @@
 //! `--max-memory`: an input or a grid that would need more than the budget fails before the
 //! allocation with a message that names the file and suggests a coarser setting.
 
+use crate::common::run;
 use std::path::Path;
-mod common;
-use common::run;
 
 fn spot() -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -13,7 +13,7 @@ pub fn checker() -> Option<(PathBuf, PathBuf)> {
         .into_iter()
         .find(|p| p.exists());
     // `$SCANSURF_SHARED_DATA/../tools` when the shared data lives elsewhere (see
-    // tests/support/mod.rs), else `../shared/tools` beside the crate.
+    // tests/it/support/mod.rs), else `../shared/tools` beside the crate.
     let shared_tools = std::env::var_os("SCANSURF_SHARED_DATA")
         .map(|d| PathBuf::from(d).join("../tools/cad_check.py"));
     let script = shared_tools
@@ -106,4 +106,37 @@ pub fn fit_report(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value
         String::from_utf8_lossy(&o.stderr)
     );
     serde_json::from_slice(&std::fs::read(&report).expect("read the report")).expect("JSON report")
+}
+
+/// A directory for the outputs of one computation shared by several tests:
+/// `$CARGO_TARGET_TMPDIR/NAME` (under `target/`), emptied first. It stays after the run (a
+/// shared result lives in a static, which is never dropped), so a failure can be looked at.
+pub fn scratch_dir(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create the scratch directory");
+    dir
+}
+
+/// The value of `cell`, computed by `make` on first use and shared by every test that checks
+/// it (one expensive fit, several tests of its validity, accuracy and continuity). A panic in
+/// `make` is kept: every test that shares the value fails with its message, without running
+/// `make` again.
+pub fn shared<T: Send + Sync>(
+    cell: &'static std::sync::OnceLock<Result<T, String>>,
+    make: impl FnOnce() -> T,
+) -> &'static T {
+    let result = cell.get_or_init(|| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(make)).map_err(|payload| {
+            payload
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_else(|| "(no message)".to_string())
+        })
+    });
+    match result {
+        Ok(v) => v,
+        Err(msg) => panic!("the shared computation failed: {msg}"),
+    }
 }

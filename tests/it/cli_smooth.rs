@@ -1,8 +1,7 @@
 //! `scansurf smooth` through the binary.
 
+use crate::common::run;
 use std::path::Path;
-mod common;
-use common::run;
 
 #[test]
 fn smooths_keeps_connectivity_and_reports() {

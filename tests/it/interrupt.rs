@@ -1,6 +1,5 @@
 //! SIGINT and SIGKILL in the middle of `scansurf fit`: afterwards the output directory holds no
 //! STEP file (or, had the run already finished writing it, a complete one) and no temporary file.
-#![cfg(unix)]
 
 use std::path::Path;
 use std::process::{Command, Stdio};

@@ -2,8 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
-use common::run as scansurf;
+use crate::common::run as scansurf;
 
 fn shared(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
