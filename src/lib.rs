@@ -8,6 +8,7 @@
 pub mod cli;
 pub mod error;
 pub mod export;
+pub mod features;
 pub mod fit;
 pub mod holes;
 pub mod implicit;

@@ -1,6 +1,7 @@
 //! The `scansurf` command line: clap subcommands that parse, call the library and print.
 //! No algorithms live here.
 
+mod features;
 mod fill_holes;
 mod fit;
 mod inspect;
@@ -44,6 +45,12 @@ pub enum Command {
         after_help = "Examples:\n  scansurf fill-holes bunny.obj -o filled.ply\n  scansurf fill-holes scan.ply -o out.ply --method planar --max-size 20 --report holes.json"
     )]
     FillHoles(fill_holes::Args),
+    /// Find the sharp features of a mesh or noisy point cloud: its noise, smooth regions, the
+    /// crease polylines between them and the corners where three or more meet.
+    #[command(
+        after_help = "Examples:\n  scansurf features part.stl -o part-features.json --ply creases.ply\n  scansurf features scan.xyz -o f.json --regions-ply regions.ply --angle 30\n  scansurf render part.stl -o part.png --features part-features.json"
+    )]
+    Features(features::Args),
     /// Count points, faces, components, holes and defects of a mesh or point cloud.
     #[command(
         after_help = "Example:\n  scansurf inspect scan.ply\n  scansurf inspect bunny.obj --json > bunny.json"
@@ -98,6 +105,7 @@ pub fn run() -> i32 {
     let result = match cli.command {
         Command::Fit(a) => fit::run(a, cli.quiet),
         Command::FillHoles(a) => fill_holes::run(a, cli.quiet),
+        Command::Features(a) => features::run(a, cli.quiet),
         Command::Inspect(a) => inspect::run(a, cli.quiet),
         Command::Smooth(a) => smooth::run(a, cli.quiet),
         Command::Render(a) => render::run(a, cli.quiet),

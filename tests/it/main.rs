@@ -10,6 +10,7 @@ mod support;
 
 mod bad_inputs;
 mod cad_roundtrip;
+mod cli_features;
 mod cli_fill_holes;
 mod cli_fit;
 mod cli_inspect;
@@ -18,6 +19,7 @@ mod cli_render;
 mod cli_sketch;
 mod cli_smooth;
 mod determinism;
+mod features;
 mod fill_holes_ground_truth;
 mod fill_holes_models;
 mod fit_scanner;

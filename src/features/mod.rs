@@ -1,0 +1,381 @@
+//! Sharp features of the input: the smooth regions (faces) of a machined part and the creases
+//! and corners where they meet, detected once and then consulted by the stages of `fit`
+//! (the implicit of each region, the quad net whose edges run along the creases, the patches
+//! that meet G0 there) instead of branches grown inside each stage.
+//!
+//! - [`detect`]: the whole detection for the `features` command (noise, regions, creases,
+//!   corners), thresholds from the data;
+//! - [`segment_mesh`]: regions of a triangle mesh (dihedral angles of its edges);
+//! - [`segment_cloud`]: regions of a noisy point cloud (local quadric residuals and normal
+//!   bend, region growing, the crease band assigned by distance to each side's surface);
+//! - [`merge`]: regions that meet smoothly become one;
+//! - [`details`]: small regions of a mesh behind mild creases (organic detail) join a
+//!   neighbour;
+//! - [`crease_mesh`], [`crease_cloud`]: crease polylines and corners of each kind of input;
+//! - [`lines`]: the polylines and corners, and the steps both kinds share;
+//! - [`export`]: PLY files of the creases and of the labelled points;
+//! - [`local_fit`]: the local quadratic height functions the segmentations use;
+//! - [`union_find`]: disjoint sets.
+//!
+//! A [`Segmentation`] holds each region's points with one-sided normals (normals beside a
+//! crease belong to their own face, not a blend of both), and a labelled point set that answers
+//! "which region is the surface near x": the input points of a cloud, the vertices and face
+//! centres of a mesh.
+
+pub mod crease_cloud;
+pub mod crease_mesh;
+pub mod details;
+pub mod detect;
+pub mod export;
+pub mod lines;
+pub mod local_fit;
+pub mod merge;
+pub mod segment_cloud;
+pub mod segment_mesh;
+pub mod union_find;
+
+use crate::mesh::normals::vertex_normals;
+use crate::mesh::Mesh;
+use crate::normals::OrientedPoints;
+use crate::spatial::KdTree;
+use crate::Result;
+use nalgebra::{Point3, Vector3};
+
+pub use detect::{detect, DetectOptions, Features};
+pub use lines::Crease;
+pub use segment_cloud::{segment_cloud, CloudOptions};
+pub use segment_mesh::{segment_mesh, MeshOptions};
+
+/// Two regions that meet at a crease.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct RegionPair {
+    pub a: u32,
+    pub b: u32,
+    /// Angle between the two sides' normals across their common boundary, degrees.
+    pub dihedral_deg: f64,
+    /// Size of the evidence: boundary point pairs (cloud) or common mesh edges (mesh).
+    pub boundary_samples: usize,
+}
+
+/// The points of one smooth region with unit outward normals of that region alone.
+#[derive(Debug, Clone, Default)]
+pub struct Region {
+    pub points: Vec<Point3<f64>>,
+    pub normals: Vec<Vector3<f64>>,
+}
+
+/// Options of [`segment`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FeatureOptions {
+    pub mesh: MeshOptions,
+    pub cloud: CloudOptions,
+}
+
+/// What the segmentation found, for the report.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct SegmentStats {
+    /// "mesh" (dihedral angles) or "cloud" (local fits).
+    pub method: &'static str,
+    pub regions: usize,
+    /// Region pairs that meet at a crease, with their dihedral angles.
+    pub pairs: Vec<RegionPair>,
+    /// Points per region.
+    pub region_points: Vec<usize>,
+    /// Median residual of the cloud's local fits (about its noise), absolute; 0 for a mesh.
+    pub sigma: f64,
+    pub seconds: f64,
+}
+
+/// Smooth regions of an input and the means to ask which region a point is near.
+#[derive(Debug)]
+pub struct Segmentation {
+    pub regions: Vec<Region>,
+    /// Labelled points (positions, region of each) and their tree.
+    label_points: Vec<Point3<f64>>,
+    label_of: Vec<u32>,
+    label_kd: KdTree,
+    pub stats: SegmentStats,
+}
+
+impl Segmentation {
+    /// A segmentation from regions given directly (tests, callers that segment otherwise): the
+    /// labelled points are the regions' own.
+    pub fn from_regions(regions: Vec<Region>, stats: SegmentStats) -> Result<Segmentation> {
+        let mut label_points = Vec::new();
+        let mut label_of = Vec::new();
+        for (r, reg) in regions.iter().enumerate() {
+            label_points.extend(reg.points.iter().copied());
+            label_of.extend(std::iter::repeat_n(r as u32, reg.points.len()));
+        }
+        let label_kd = KdTree::build(&label_points)?;
+        Ok(Segmentation {
+            regions,
+            label_points,
+            label_of,
+            label_kd,
+            stats,
+        })
+    }
+
+    /// The labelled points and their regions.
+    pub fn labelled(&self) -> (&[Point3<f64>], &[u32]) {
+        (&self.label_points, &self.label_of)
+    }
+
+    /// Region of the labelled point nearest to `x`.
+    pub fn region_near(&self, x: &Point3<f64>) -> u32 {
+        self.label_of[self.label_kd.nearest(x).0]
+    }
+
+    /// Regions of the labelled points among the `k` nearest to `x`, with their counts, most
+    /// frequent first (ties by region id).
+    pub fn regions_near(&self, x: &Point3<f64>, k: usize) -> Vec<(u32, usize)> {
+        let mut v: Vec<u32> = self
+            .label_kd
+            .knn(x, k)
+            .into_iter()
+            .map(|(i, _)| self.label_of[i])
+            .collect();
+        v.sort_unstable();
+        let mut out: Vec<(u32, usize)> = Vec::new();
+        for l in v {
+            match out.last_mut() {
+                Some((m, c)) if *m == l => *c += 1,
+                _ => out.push((l, 1)),
+            }
+        }
+        out.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+        out
+    }
+
+    /// True when there is more than one region (something for the feature-aware stages to do).
+    pub fn has_features(&self) -> bool {
+        self.regions.len() > 1
+    }
+
+    /// Merges every region holding less than `min_fraction` of all region points into the
+    /// neighbour it shares the longest boundary with (smallest first; a region with no
+    /// neighbour stays): a face smaller than a few patches cannot be given patches of its own,
+    /// and its crease would only crowd the net (the ears of an organic model, a small facet
+    /// of a coarse mesh). Returns how many regions were merged.
+    pub fn absorb_small(&mut self, min_fraction: f64) -> usize {
+        let mut merged = 0;
+        loop {
+            let total: usize = self.regions.iter().map(|r| r.points.len()).sum();
+            let small = (0..self.regions.len())
+                .filter(|&r| (self.regions[r].points.len() as f64) < min_fraction * total as f64)
+                .filter(|&r| {
+                    self.stats
+                        .pairs
+                        .iter()
+                        .any(|p| p.a == r as u32 || p.b == r as u32)
+                })
+                .min_by_key(|&r| (self.regions[r].points.len(), r));
+            let Some(r) = small else { break };
+            let r = r as u32;
+            let into = self
+                .stats
+                .pairs
+                .iter()
+                .filter(|p| p.a == r || p.b == r)
+                .max_by(|x, y| {
+                    x.boundary_samples
+                        .cmp(&y.boundary_samples)
+                        .then(y.a.cmp(&x.a))
+                        .then(y.b.cmp(&x.b))
+                })
+                .map(|p| if p.a == r { p.b } else { p.a });
+            let Some(into) = into else { break };
+            let mut sets = union_find::DisjointSets::new(self.regions.len());
+            sets.union(r, into);
+            self.remap(&sets.labels().0);
+            merged += 1;
+        }
+        merged
+    }
+
+    /// Relabels regions by `map` (old region -> new, numbered 0.. in order), merging those that
+    /// map to one.
+    fn remap(&mut self, map: &[u32]) {
+        let count = map.iter().map(|&m| m as usize + 1).max().unwrap_or(0);
+        let mut regions = vec![Region::default(); count];
+        for (old, reg) in std::mem::take(&mut self.regions).into_iter().enumerate() {
+            let dst = &mut regions[map[old] as usize];
+            dst.points.extend(reg.points);
+            dst.normals.extend(reg.normals);
+        }
+        self.regions = regions;
+        for l in self.label_of.iter_mut() {
+            *l = map[*l as usize];
+        }
+        let mut pairs: Vec<RegionPair> = Vec::new();
+        for p in &self.stats.pairs {
+            let (a, b) = (map[p.a as usize], map[p.b as usize]);
+            if a == b {
+                continue;
+            }
+            let (a, b) = (a.min(b), a.max(b));
+            match pairs.iter_mut().find(|q| q.a == a && q.b == b) {
+                Some(q) => {
+                    if p.boundary_samples > q.boundary_samples {
+                        q.dihedral_deg = p.dihedral_deg;
+                    }
+                    q.boundary_samples += p.boundary_samples;
+                }
+                None => pairs.push(RegionPair { a, b, ..*p }),
+            }
+        }
+        pairs.sort_by_key(|p| (p.a, p.b));
+        self.stats.pairs = pairs;
+        self.stats.regions = self.regions.len();
+        self.stats.region_points = self.regions.iter().map(|r| r.points.len()).collect();
+    }
+}
+
+/// Segments `input` (a mesh by its faces, a cloud by `op`, its oriented points) into smooth
+/// regions.
+pub fn segment(input: &Mesh, op: &OrientedPoints, opts: &FeatureOptions) -> Result<Segmentation> {
+    let t = std::time::Instant::now();
+    let seg = if input.faces.is_empty() {
+        segment_points(op, &opts.cloud)?
+    } else {
+        segment_faces(input, op, &opts.mesh)?
+    };
+    Ok(Segmentation {
+        stats: SegmentStats {
+            seconds: t.elapsed().as_secs_f64(),
+            ..seg.stats
+        },
+        ..seg
+    })
+}
+
+fn segment_points(op: &OrientedPoints, opts: &CloudOptions) -> Result<Segmentation> {
+    let kd = KdTree::build(&op.points)?;
+    let l = segment_cloud(&op.points, &op.normals, &kd, opts);
+    let mut regions = vec![Region::default(); l.regions];
+    let mut label_points = Vec::with_capacity(op.points.len());
+    let mut label_of = Vec::with_capacity(op.points.len());
+    for (i, &r) in l.label.iter().enumerate() {
+        if r == segment_cloud::NONE {
+            continue;
+        }
+        regions[r as usize].points.push(op.points[i]);
+        regions[r as usize].normals.push(l.normals[i]);
+        label_points.push(op.points[i]);
+        label_of.push(r);
+    }
+    if label_points.is_empty() {
+        return Err(crate::Error::Degenerate(
+            "the segmentation left no point in any region".into(),
+        ));
+    }
+    let label_kd = KdTree::build(&label_points)?;
+    Ok(Segmentation {
+        stats: SegmentStats {
+            method: "cloud",
+            regions: l.regions,
+            pairs: l.pairs,
+            region_points: regions.iter().map(|r| r.points.len()).collect(),
+            sigma: l.sigma,
+            seconds: 0.0,
+        },
+        regions,
+        label_points,
+        label_of,
+        label_kd,
+    })
+}
+
+/// +1 when the mesh's faces wind outward (their vertex normals agree with the oriented points'
+/// normals, which the normal stage made to point out), -1 when they wind inward.
+fn winding(mesh: &Mesh, op: &OrientedPoints) -> Result<f64> {
+    let vn = vertex_normals(mesh);
+    let kd = KdTree::build(&op.points)?;
+    let used = mesh.referenced();
+    let step = (mesh.positions.len() / 2000).max(1);
+    let mut vote = 0.0;
+    for v in (0..mesh.positions.len()).step_by(step) {
+        if used[v] && vn[v].norm_squared() > 0.0 {
+            let (j, _) = kd.nearest(&mesh.positions[v]);
+            vote += vn[v].dot(&op.normals[j]).signum();
+        }
+    }
+    Ok(if vote < 0.0 { -1.0 } else { 1.0 })
+}
+
+fn segment_faces(mesh: &Mesh, op: &OrientedPoints, opts: &MeshOptions) -> Result<Segmentation> {
+    let l = segment_mesh(mesh, opts)?;
+    // Region normals from the faces, turned outward like the whole input's.
+    let sign = winding(mesh, op)?;
+    let mut regions = Vec::with_capacity(l.regions);
+    let mut label_points = Vec::new();
+    let mut label_of = Vec::new();
+    // Vertices on a crease (used by faces of two regions) are left out of the regions'
+    // points, with the samples of the triangles touching them: a remesher or a scanner moves
+    // them along and across the feature line (0.037 mm off the fillet of make_parts' block,
+    // twice the crease bar), and each region's surface, fitted from its interior and
+    // extrapolated half a triangle, puts the crease where the two meet.
+    let mut owner = vec![u32::MAX; mesh.positions.len()];
+    let mut on_crease = vec![false; mesh.positions.len()];
+    for (f, &fl) in mesh.faces.iter().zip(&l.face_label) {
+        for &v in f {
+            let o = &mut owner[v as usize];
+            if *o == u32::MAX {
+                *o = fl;
+            } else if *o != fl {
+                on_crease[v as usize] = true;
+            }
+        }
+    }
+    for r in 0..l.regions as u32 {
+        let sub = Mesh {
+            positions: mesh.positions.clone(),
+            normals: None,
+            faces: mesh
+                .faces
+                .iter()
+                .zip(&l.face_label)
+                .filter(|(_, &fl)| fl == r)
+                .map(|(f, _)| *f)
+                .collect(),
+        };
+        let vn: Vec<Vector3<f64>> = vertex_normals(&sub).into_iter().map(|n| n * sign).collect();
+        let used = sub.referenced();
+        let mut region = Region::default();
+        for (i, p) in sub.positions.iter().enumerate() {
+            if used[i] && vn[i].norm_squared() > 0.0 && !on_crease[i] {
+                region.points.push(*p);
+                region.normals.push(vn[i]);
+            }
+        }
+        for (fi, f) in sub.faces.iter().enumerate() {
+            let c = f.map(|v| sub.positions[v as usize].coords);
+            label_points.push(Point3::from((c[0] + c[1] + c[2]) / 3.0));
+            label_of.push(r);
+            let _ = fi;
+        }
+        for (i, p) in sub.positions.iter().enumerate() {
+            if used[i] {
+                label_points.push(*p);
+                label_of.push(r);
+            }
+        }
+        regions.push(region);
+    }
+    let label_kd = KdTree::build(&label_points)?;
+    Ok(Segmentation {
+        stats: SegmentStats {
+            method: "mesh",
+            regions: l.regions,
+            pairs: l.pairs,
+            region_points: regions.iter().map(|r| r.points.len()).collect(),
+            sigma: 0.0,
+            seconds: 0.0,
+        },
+        regions,
+        label_points,
+        label_of,
+        label_kd,
+    })
+}

@@ -1,0 +1,271 @@
+//! Segmentation of a triangle mesh into smooth regions: the faces joined across every edge
+//! whose dihedral angle (between the unit normals of its two triangles) is under `crease_deg`.
+//! A scan mesh of a machined part keeps its sharp edges as mesh edges, so there the creases
+//! are exact; the mesh's own noise gives scattered sharp edges, which separate nothing unless
+//! they close a loop, and what they do close is small and absorbed by its neighbour.
+//!
+//! Regions that meet smoothly after all are merged ([`super::merge`]): a coarse mesh of a curved
+//! limb has rings of edges bent by more than `crease_deg`, but the local quadratics of the two
+//! sides continue each other across them.
+//!
+//! Regions smaller than `min_faces` triangles, or narrower than `min_width` mean edge lengths
+//! (area over half the perimeter), are merged into the neighbour with which they share the
+//! longest boundary, smallest first: a ring of faces cut out by noise, or the one-triangle-wide
+//! strips a fillet of radius about the edge length falls into.
+
+use super::merge::{merge_smooth, Boundaries, Labelled};
+use super::union_find::DisjointSets;
+use super::RegionPair;
+use crate::mesh::adjacency::Adjacency;
+use crate::mesh::normals::vertex_normals;
+use crate::mesh::Mesh;
+use crate::spatial::KdTree;
+use crate::Result;
+use nalgebra::Vector3;
+use std::collections::BTreeMap;
+
+/// Options of [`segment_mesh`], with documented defaults.
+#[derive(Debug, Clone, Copy)]
+pub struct MeshOptions {
+    /// Edges whose dihedral angle is at least this separate regions, degrees (default 20).
+    pub crease_deg: f64,
+    /// Regions with fewer triangles are absorbed (default 12).
+    pub min_faces: usize,
+    /// Regions narrower than this many mean edge lengths are absorbed (default 1.5).
+    pub min_width: f64,
+    /// Vertices around a boundary sample for the merge test (default 32).
+    pub neighbours: usize,
+}
+
+impl Default for MeshOptions {
+    fn default() -> Self {
+        MeshOptions {
+            crease_deg: 20.0,
+            min_faces: 12,
+            min_width: 1.5,
+            neighbours: 32,
+        }
+    }
+}
+
+/// A labelling of the faces into smooth regions.
+#[derive(Debug, Clone)]
+pub struct MeshLabels {
+    /// Region per face (0..regions).
+    pub face_label: Vec<u32>,
+    pub regions: usize,
+    /// Regions meeting at a crease, with the length-weighted mean dihedral of their common
+    /// edges (`boundary_samples` = the number of those edges).
+    pub pairs: Vec<RegionPair>,
+}
+
+/// Segments the faces of `mesh` into smooth regions.
+pub fn segment_mesh(mesh: &Mesh, opt: &MeshOptions) -> Result<MeshLabels> {
+    let adj = Adjacency::build(mesh)?;
+    let nf = mesh.faces.len();
+    let normals: Vec<Option<Vector3<f64>>> = (0..nf)
+        .map(|f| mesh.face_cross(f).try_normalize(1e-300))
+        .collect();
+    let cos_crease = opt.crease_deg.to_radians().cos();
+    // Per manifold edge: its two faces, length and dihedral cosine.
+    let mut sets = DisjointSets::new(nf);
+    let mut edges: Vec<(u32, u32, f64, f64)> = Vec::new();
+    let mut edge_ends: Vec<[u32; 2]> = Vec::new();
+    for (e, &[a, b]) in adj.edges.iter().enumerate() {
+        let faces = adj.faces_of_edge(e);
+        let &[f, g] = faces else { continue };
+        let (Some(nf_), Some(ng)) = (normals[f as usize], normals[g as usize]) else {
+            // A degenerate triangle takes its neighbours' region.
+            sets.union(f, g);
+            continue;
+        };
+        let c = nf_.dot(&ng).clamp(-1.0, 1.0);
+        let len = (mesh.positions[a as usize] - mesh.positions[b as usize]).norm();
+        edges.push((f, g, len, c));
+        edge_ends.push([a, b]);
+        if c > cos_crease {
+            sets.union(f, g);
+        }
+    }
+    let (mut label, mut count) = sets.labels();
+    let mean_edge = mesh.mean_edge_length();
+
+    // Absorb small and thin regions into their longest-bordering neighbour, smallest first.
+    loop {
+        let mut area = vec![0.0; count];
+        let mut faces = vec![0usize; count];
+        for f in 0..nf {
+            area[label[f] as usize] += mesh.face_area(f);
+            faces[label[f] as usize] += 1;
+        }
+        let mut perimeter = vec![0.0; count];
+        let mut border: BTreeMap<(u32, u32), f64> = BTreeMap::new();
+        for &(f, g, len, _) in &edges {
+            let (a, b) = (label[f as usize], label[g as usize]);
+            if a != b {
+                perimeter[a as usize] += len;
+                perimeter[b as usize] += len;
+                *border.entry((a.min(b), a.max(b))).or_default() += len;
+            }
+        }
+        let small = |r: usize| {
+            faces[r] < opt.min_faces
+                || (perimeter[r] > 0.0
+                    && area[r] / (0.5 * perimeter[r]) < opt.min_width * mean_edge)
+        };
+        let victim = (0..count)
+            .filter(|&r| small(r) && perimeter[r] > 0.0)
+            .min_by(|&a, &b| area[a].total_cmp(&area[b]).then(a.cmp(&b)));
+        let Some(r) = victim else { break };
+        let r = r as u32;
+        let into = border
+            .iter()
+            .filter(|(k, _)| k.0 == r || k.1 == r)
+            .max_by(|x, y| x.1.total_cmp(y.1).then(y.0.cmp(x.0)))
+            .map(|(k, _)| if k.0 == r { k.1 } else { k.0 });
+        let Some(into) = into else { break };
+        let mut sets = DisjointSets::new(count);
+        sets.union(r, into);
+        let (map, c) = sets.labels();
+        for l in label.iter_mut() {
+            *l = map[*l as usize];
+        }
+        count = c;
+    }
+
+    // Regions cut apart on a smooth surface (a coarse mesh's rings of bent edges) merged back
+    // by comparing local quadratics of each side's vertices (region-only vertex normals).
+    if count > 1 {
+        let mut points = Vec::new();
+        let mut vnormals = Vec::new();
+        let mut vlabel = Vec::new();
+        for r in 0..count as u32 {
+            let sub = Mesh {
+                positions: mesh.positions.clone(),
+                normals: None,
+                faces: (0..nf)
+                    .filter(|&f| label[f] == r)
+                    .map(|f| mesh.faces[f])
+                    .collect(),
+            };
+            let vn = vertex_normals(&sub);
+            for (v, used) in sub.referenced().into_iter().enumerate() {
+                if used && vn[v].norm_squared() > 0.0 {
+                    points.push(mesh.positions[v]);
+                    vnormals.push(vn[v]);
+                    vlabel.push(r);
+                }
+            }
+        }
+        let kd = KdTree::build(&points)?;
+        let mut boundaries: Boundaries = BTreeMap::new();
+        for (e, &(f, g, _, _)) in edges.iter().enumerate() {
+            let (a, b) = (label[f as usize], label[g as usize]);
+            if a != b {
+                let [p, q] = edge_ends[e];
+                let x = nalgebra::center(&mesh.positions[p as usize], &mesh.positions[q as usize]);
+                let entry = boundaries.entry((a.min(b), a.max(b))).or_default();
+                entry.0.push(x);
+                entry.1 += 1;
+            }
+        }
+        let lab = Labelled {
+            points: &points,
+            normals: &vnormals,
+            label: &vlabel,
+            kd: &kd,
+        };
+        let merged = merge_smooth(&lab, &boundaries, count, opt.neighbours, 48, opt.crease_deg);
+        for l in label.iter_mut() {
+            *l = merged.map[*l as usize];
+        }
+        count = merged.regions;
+    }
+
+    // Pairs meeting at creases: length-weighted mean dihedral of their common edges.
+    let mut acc: BTreeMap<(u32, u32), (f64, f64, usize)> = BTreeMap::new();
+    for &(f, g, len, c) in &edges {
+        let (a, b) = (label[f as usize], label[g as usize]);
+        if a != b {
+            let e = acc.entry((a.min(b), a.max(b))).or_default();
+            e.0 += len * c.acos().to_degrees();
+            e.1 += len;
+            e.2 += 1;
+        }
+    }
+    let pairs = acc
+        .into_iter()
+        .map(|((a, b), (sum, len, n))| RegionPair {
+            a,
+            b,
+            dihedral_deg: sum / len.max(f64::MIN_POSITIVE),
+            boundary_samples: n,
+        })
+        .collect();
+    Ok(MeshLabels {
+        face_label: label,
+        regions: count,
+        pairs,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Point3;
+
+    /// A unit cube split into 12 triangles per face side (2 x 2 grid per face).
+    fn cube() -> Mesh {
+        let mut positions = Vec::new();
+        let mut faces = Vec::new();
+        let mut index = std::collections::HashMap::new();
+        let mut vid = |p: [i32; 3], positions: &mut Vec<Point3<f64>>| -> u32 {
+            *index.entry(p).or_insert_with(|| {
+                positions.push(Point3::new(p[0] as f64, p[1] as f64, p[2] as f64) / 4.0);
+                positions.len() as u32 - 1
+            })
+        };
+        // Each face: axis a fixed at 0 or 4, grid over the other two (4 x 4 cells).
+        for a in 0..3 {
+            for side in [0, 4] {
+                let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+                for i in 0..4 {
+                    for j in 0..4 {
+                        let corner = |di: i32, dj: i32| {
+                            let mut p = [0; 3];
+                            p[a] = side;
+                            p[b] = i + di;
+                            p[c] = j + dj;
+                            p
+                        };
+                        let q = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)]
+                            .map(|p| vid(p, &mut positions));
+                        if side == 4 {
+                            faces.push([q[0], q[1], q[2]]);
+                            faces.push([q[0], q[2], q[3]]);
+                        } else {
+                            faces.push([q[0], q[2], q[1]]);
+                            faces.push([q[0], q[3], q[2]]);
+                        }
+                    }
+                }
+            }
+        }
+        Mesh {
+            positions,
+            normals: None,
+            faces,
+        }
+    }
+
+    #[test]
+    fn cube_has_six_faces_and_twelve_creases() {
+        let m = cube();
+        let l = segment_mesh(&m, &MeshOptions::default()).unwrap();
+        assert_eq!(l.regions, 6);
+        assert_eq!(l.pairs.len(), 12);
+        for p in &l.pairs {
+            assert!((p.dihedral_deg - 90.0).abs() < 1e-9, "{p:?}");
+        }
+    }
+}

@@ -1,0 +1,228 @@
+//! `scansurf features` end to end: creases and corners of machined parts made by
+//! `../shared/tools/make_parts.py` (exact CAD truth), measured by the independent
+//! `../shared/tools/feature_check.py` (OpenCASCADE), from a mesh (.stl) and from a noisy
+//! cloud (.xyz); none on organic models; bad options and inputs.
+
+use crate::common::{self, json_f64 as f};
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tools() -> Option<PathBuf> {
+    let dir = std::env::var_os("SCANSURF_SHARED_DATA")
+        .map(|d| PathBuf::from(d).join("../tools"))
+        .unwrap_or_else(|| repo().join("../shared/tools"));
+    dir.join("make_parts.py").exists().then_some(dir)
+}
+
+/// make_parts' block and bracket (200,000 points, noise 0.01 mm), made once per test run;
+/// `None` outside CI when the tools or the checker's venv are missing.
+fn parts() -> Option<&'static PathBuf> {
+    static PARTS: OnceLock<Result<PathBuf, String>> = OnceLock::new();
+    let (py, _) = common::checker()?;
+    let Some(tools) = tools() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI: ../shared/tools/make_parts.py is missing"
+        );
+        eprintln!("SKIPPED: no make_parts.py");
+        return None;
+    };
+    Some(common::shared(&PARTS, || {
+        let dir = common::scratch_dir("cli_features_parts");
+        let o = std::process::Command::new(&py)
+            .arg(tools.join("make_parts.py"))
+            .arg(&dir)
+            .args(["--parts", "block,bracket"])
+            .output()
+            .expect("run make_parts.py");
+        assert!(
+            o.status.success(),
+            "make_parts.py: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        dir
+    }))
+}
+
+/// Runs `scansurf features INPUT -o OUT.json --ply OUT.ply`, returns the JSON.
+fn features(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let ply = out.with_extension("ply");
+    let (code, _, err) = common::run(
+        &[
+            &["features", input.to_str().unwrap(), "-q", "-o"],
+            &[out.to_str().unwrap(), "--ply", ply.to_str().unwrap()][..],
+            extra,
+        ]
+        .concat(),
+    );
+    assert_eq!(code, 0, "{err}");
+    serde_json::from_slice(&std::fs::read(out).unwrap()).unwrap()
+}
+
+/// feature_check.py's verdict on FEATURES.json against the part's STEP truth.
+fn feature_check(features: &Path, truth: &Path) -> serde_json::Value {
+    let (py, _) = common::checker().expect("checked by parts()");
+    let o = std::process::Command::new(py)
+        .arg(tools().unwrap().join("feature_check.py"))
+        .arg(features)
+        .arg(truth)
+        .output()
+        .expect("run feature_check.py");
+    let text = String::from_utf8_lossy(&o.stdout);
+    let line = text
+        .lines()
+        .rev()
+        .find(|l| l.starts_with('{'))
+        .unwrap_or_else(|| {
+            panic!(
+                "feature_check printed no JSON: {text} {}",
+                String::from_utf8_lossy(&o.stderr)
+            )
+        });
+    println!("feature_check {}: {line}", features.display());
+    serde_json::from_str(line).unwrap()
+}
+
+/// The bars: creases along at least 95 % of the true sharp edges (within 1 % of the
+/// diagonal), at least 95 % of the detected length on a true edge, every true corner found.
+fn meets_the_bars(input: &str, part: &str) {
+    let Some(dir) = parts() else { return };
+    let out = common::scratch_dir(&format!("cli_features_{part}_{input}")).join("f.json");
+    let v = features(&dir.join(format!("{part}.{input}")), &out, &[]);
+    assert!(v["regions"].as_u64().unwrap() >= 6, "{}", v["regions"]);
+    let c = feature_check(&out, &dir.join(format!("{part}.step")));
+    assert!(f(&c, &["recall"]) >= 0.95, "{c}");
+    assert!(f(&c, &["precision"]) >= 0.95, "{c}");
+    assert_eq!(c["corners"]["found"], c["corners"]["true"], "{c}");
+    // The PLY holds every crease vertex and corner, and reads back.
+    let lines = scansurf::io::read_mesh(&out.with_extension("ply")).unwrap();
+    let expect: usize = v["creases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["points"].as_array().unwrap().len())
+        .sum::<usize>()
+        + v["corners"].as_array().unwrap().len();
+    assert_eq!(lines.positions.len(), expect);
+    if input == "xyz" {
+        // The noise estimate is the scanner's sigma (0.01 mm), not the part's size.
+        let noise = f(&v, &["noise"]);
+        assert!(noise > 0.005 && noise < 0.02, "noise {noise}");
+    }
+}
+
+#[test]
+fn block_mesh_creases_and_corners_meet_the_bars() {
+    meets_the_bars("stl", "block");
+}
+
+#[test]
+fn bracket_cloud_creases_and_corners_meet_the_bars() {
+    meets_the_bars("xyz", "bracket");
+}
+
+/// Organic models have no long crease: the spot fixture as a mesh and as its vertices.
+#[test]
+fn spot_has_no_long_crease() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = repo().join("fixtures/spot.obj");
+    let spot = scansurf::io::read_mesh(&mesh).unwrap();
+    let cloud = dir.path().join("spot.xyz");
+    let xyz: String = spot
+        .positions
+        .iter()
+        .map(|p| format!("{} {} {}\n", p.x, p.y, p.z))
+        .collect();
+    std::fs::write(&cloud, xyz).unwrap();
+    for input in [mesh, cloud] {
+        let v = features(&input, &dir.path().join("f.json"), &[]);
+        let diag = f(&v, &["diagonal"]);
+        for c in v["creases"].as_array().unwrap() {
+            let pts: Vec<[f64; 3]> = serde_json::from_value(c["points"].clone()).unwrap();
+            let len: f64 = pts
+                .windows(2)
+                .map(|w| {
+                    (0..3)
+                        .map(|k| (w[1][k] - w[0][k]).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .sum();
+            assert!(
+                len <= 0.05 * diag,
+                "{}: crease {len} of {diag}",
+                input.display()
+            );
+        }
+    }
+}
+
+/// The regions PLY labels every point, coloured by region.
+#[test]
+fn regions_ply_labels_every_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = repo().join("fixtures/spot.obj");
+    let regions = dir.path().join("r.ply");
+    let out = dir.path().join("f.json");
+    let (code, _, err) = common::run(&[
+        "features",
+        input.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+        "--regions-ply",
+        regions.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    let labelled: u64 = v["region_points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .sum();
+    let r = scansurf::io::read_mesh(&regions).unwrap();
+    let spot = scansurf::io::read_mesh(&input).unwrap();
+    assert_eq!(r.positions.len(), spot.referenced_points().0.len());
+    assert_eq!(labelled as usize, r.positions.len());
+}
+
+/// Bad options and inputs: a message naming the problem, exit 1 or 2, no file written.
+#[test]
+fn bad_options_and_inputs_leave_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = repo().join("fixtures/spot.obj");
+    let empty = dir.path().join("empty.xyz");
+    std::fs::write(&empty, "").unwrap();
+    let out = dir.path().join("f.json");
+    let i = input.to_str().unwrap();
+    let o = out.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["features", i, "-o", "f.txt"], "must end in .json"),
+        (
+            vec!["features", i, "-o", o, "--ply", "x.obj"],
+            "must end in .ply",
+        ),
+        (vec!["features", i, "-o", o, "--angle", "200"], "--angle"),
+        (vec!["features", i, "-o", o, "--angle", "nan"], "--angle"),
+        (
+            vec!["features", "/nonexistent/scan.ply", "-o", o],
+            "scan.ply",
+        ),
+        (
+            vec!["features", empty.to_str().unwrap(), "-o", o],
+            "empty.xyz",
+        ),
+    ] {
+        let (code, _, err) = common::run(&args);
+        assert!(code != 0, "{args:?}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?}");
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}
