@@ -38,6 +38,10 @@ pub struct Args {
     /// `fit` report lists among its largest normal jumps.
     #[arg(long, value_name = "X,Y,Z,R", allow_hyphen_values = true)]
     pub focus: Option<String>,
+    /// Draw the creases (red) and corners (blue) of this `scansurf features` file over the
+    /// model.
+    #[arg(long, value_name = "FEATURES.json")]
+    pub features: Option<PathBuf>,
     /// Subsample point clouds above this many points (voxel grid) before drawing.
     #[arg(long)]
     pub max_points: Option<usize>,
@@ -79,9 +83,22 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     if let Some(max) = a.max_points {
         mesh = crate::mesh::subsample::limit_points(mesh, max)?;
     }
-    let (mesh, lines) = match &focus {
-        Some(f) => f.crop(mesh, &lines)?,
-        None => (mesh, lines),
+    // Creases as polylines, corners as dots (a polyline of one repeated point).
+    let (creases, corners) = match &a.features {
+        Some(p) => {
+            let (c, k) = crate::features::export::read_lines_json(p)?;
+            (c, k.into_iter().map(|p| vec![p, p]).collect())
+        }
+        None => (Vec::new(), Vec::new()),
+    };
+    let (mesh, lines, creases, corners) = match &focus {
+        Some(f) => {
+            let (_, creases) = f.crop(mesh.clone(), &creases)?;
+            let (_, corners) = f.crop(mesh.clone(), &corners)?;
+            let (mesh, lines) = f.crop(mesh, &lines)?;
+            (mesh, lines, creases, corners)
+        }
+        None => (mesh, lines, creases, corners),
     };
     let opts = RenderOptions {
         width,
@@ -114,9 +131,26 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     if a.deviation.is_some() {
         opts.legend_title = "point deviation".into();
     }
+    let layers = [
+        render::LineLayer {
+            lines: &lines,
+            color: opts.line_color,
+            width: opts.line_width,
+        },
+        render::LineLayer {
+            lines: &creases,
+            color: [220, 30, 30],
+            width: 2.5 * opts.line_width,
+        },
+        render::LineLayer {
+            lines: &corners,
+            color: [30, 60, 230],
+            width: 6.0 * opts.line_width,
+        },
+    ];
     let img = match scalars {
-        Some((d, scale)) => render::render_mesh(&mesh, Some((&d, scale)), &lines, &opts)?,
-        None => render::render_mesh(&mesh, None, &lines, &opts)?,
+        Some((d, scale)) => render::render_mesh_layers(&mesh, Some((&d, scale)), &layers, &opts)?,
+        None => render::render_mesh_layers(&mesh, None, &layers, &opts)?,
     };
     img.save_png(&a.output)?;
     spinner.finish_and_clear();

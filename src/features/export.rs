@@ -4,6 +4,7 @@
 
 use super::detect::{Features, UNLABELLED};
 use crate::Result;
+use nalgebra::Point3;
 use std::path::Path;
 
 /// A distinct colour per index (golden-angle hues), grey for unlabelled.
@@ -88,6 +89,46 @@ pub fn write_regions_ply(path: &Path, f: &Features) -> Result<()> {
         }
         w.write_all(&buf)
     })
+}
+
+/// A polyline's vertices.
+pub type Polyline = Vec<Point3<f64>>;
+
+/// The crease polylines and corners of a `features` JSON file, for drawing.
+pub fn read_lines_json(path: &Path) -> Result<(Vec<Polyline>, Vec<Point3<f64>>)> {
+    #[derive(serde::Deserialize)]
+    struct CreaseIn {
+        points: Vec<[f64; 3]>,
+    }
+    #[derive(serde::Deserialize)]
+    struct FeaturesIn {
+        creases: Vec<CreaseIn>,
+        #[serde(default)]
+        corners: Vec<[f64; 3]>,
+    }
+    let bytes = crate::io::read_bytes(path)?;
+    let f: FeaturesIn = serde_json::from_slice(&bytes).map_err(|e| {
+        crate::Error::content(
+            path,
+            format!("is not a features file (scansurf features -o): {e}"),
+        )
+    })?;
+    let finite = |p: &[f64; 3]| p.iter().all(|c| c.is_finite());
+    if f.creases
+        .iter()
+        .flat_map(|c| &c.points)
+        .chain(&f.corners)
+        .any(|p| !finite(p))
+    {
+        return Err(crate::Error::content(path, "holds a non-finite coordinate"));
+    }
+    Ok((
+        f.creases
+            .into_iter()
+            .map(|c| c.points.into_iter().map(Point3::from).collect())
+            .collect(),
+        f.corners.into_iter().map(Point3::from).collect(),
+    ))
 }
 
 #[cfg(test)]

@@ -143,13 +143,40 @@ impl RenderOptions {
     }
 }
 
+/// Polylines drawn in one colour and width over the surface, where visible (a polyline of
+/// one repeated point draws a dot: a corner).
+#[derive(Debug, Clone, Copy)]
+pub struct LineLayer<'a> {
+    pub lines: &'a [Vec<Point3<f64>>],
+    /// sRGB colour.
+    pub color: [u8; 3],
+    /// Width in output pixels.
+    pub width: f32,
+}
+
 /// Renders a mesh (or, when it has no faces, a point cloud) with optional per-vertex scalars
-/// (deviation) coloured by `scale` with a legend, and polylines (patch boundaries, feature
-/// lines) drawn over the surface where visible.
+/// (deviation) coloured by `scale` with a legend, and polylines (patch boundaries) drawn in
+/// `opts.line_color` over the surface where visible.
 pub fn render_mesh(
     mesh: &Mesh,
     scalars: Option<(&[f64], ColorScale)>,
     lines: &[Vec<Point3<f64>>],
+    opts: &RenderOptions,
+) -> Result<Image> {
+    let layer = LineLayer {
+        lines,
+        color: opts.line_color,
+        width: opts.line_width,
+    };
+    render_mesh_layers(mesh, scalars, &[layer], opts)
+}
+
+/// [`render_mesh`] with several layers of lines (patch boundaries, then creases and corners
+/// over them), each in its own colour and width; later layers are drawn over earlier ones.
+pub fn render_mesh_layers(
+    mesh: &Mesh,
+    scalars: Option<(&[f64], ColorScale)>,
+    layers: &[LineLayer],
     opts: &RenderOptions,
 ) -> Result<Image> {
     opts.validate()?;
@@ -191,7 +218,7 @@ pub fn render_mesh(
         .zip(&used)
         .filter(|(_, &u)| u)
         .map(|(p, _)| p)
-        .chain(lines.iter().flatten());
+        .chain(layers.iter().flat_map(|l| l.lines.iter().flatten()));
     let cam_out = Camera::fit(
         opts.view,
         opts.up,
@@ -314,13 +341,13 @@ pub fn render_mesh(
     let mut color = shaded;
 
     // 5. Lines.
-    if !lines.is_empty() {
+    for layer in layers {
         let style = LineStyle {
-            color: opts.line_color,
-            width: opts.line_width * ss as f32,
+            color: layer.color,
+            width: layer.width * ss as f32,
             depth_tolerance: 0.004 * depth_range + 2.0 / cam.scale as f32,
         };
-        for l in lines {
+        for l in layer.lines {
             if l.iter().any(|p| !p.iter().all(|c| c.is_finite())) {
                 return Err(Error::Degenerate(
                     "a line to draw has a non-finite point".into(),
