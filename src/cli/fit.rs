@@ -66,6 +66,11 @@ pub struct Args {
     /// every face as its whole surface.
     #[arg(long, default_value = "auto", value_name = "auto|never")]
     pub extend_surfaces: String,
+    /// Also find the input's sharp features (creases, corners, smooth regions, noise; as
+    /// `scansurf features`) and summarize them in the report under `features`. The surfaces
+    /// do not follow them yet.
+    #[arg(long)]
+    pub features: bool,
     /// Header time stamp (ISO 8601, e.g. 2026-11-22T10:00:00). Default: SOURCE_DATE_EPOCH if
     /// set, else 1970-01-01T00:00:00, so the same input gives byte-identical files.
     #[arg(long)]
@@ -187,6 +192,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         size,
         tolerance: a.tolerance,
         apron_unit: (extend_surfaces == ExtendSurfaces::Auto).then_some(unit),
+        features: a.features.then(crate::features::DetectOptions::default),
         ..FitOptions::default()
     };
     opts.implicit.tolerance = a.fit_tolerance;

@@ -19,7 +19,7 @@ use super::segment_mesh::{segment_mesh, MeshOptions};
 use crate::implicit::noise::estimate_noise;
 use crate::mesh::normals::vertex_normals;
 use crate::mesh::Mesh;
-use crate::normals::oriented_points;
+use crate::normals::{oriented_points, OrientedPoints};
 use crate::spatial::KdTree;
 use crate::{Error, Result};
 use nalgebra::Point3;
@@ -92,12 +92,64 @@ pub struct Features {
     pub label: Vec<u32>,
 }
 
+/// What `fit`'s report says of the features (`fit --features`): the counts of [`Features`].
+#[derive(Debug, Clone, Serialize)]
+pub struct FeatureSummary {
+    pub method: &'static str,
+    pub noise: f64,
+    pub regions: usize,
+    pub creases: usize,
+    pub corners: usize,
+    /// Total crease length, in input units and as a fraction of the bounding-box diagonal.
+    pub crease_length: f64,
+    pub crease_length_rel: f64,
+    pub seconds: f64,
+}
+
+impl Features {
+    /// The counts for a report.
+    pub fn summary(&self) -> FeatureSummary {
+        FeatureSummary {
+            method: self.method,
+            noise: self.noise,
+            regions: self.regions,
+            creases: self.creases.len(),
+            corners: self.corners.len(),
+            crease_length: self.crease_length,
+            crease_length_rel: if self.diagonal > 0.0 {
+                self.crease_length / self.diagonal
+            } else {
+                0.0
+            },
+            seconds: self.seconds,
+        }
+    }
+}
+
 /// Label of a point no region took.
 pub const UNLABELLED: u32 = NONE;
 
 /// Finds the noise, smooth regions, creases and corners of `input` (a mesh when it has faces,
 /// else a cloud).
 pub fn detect(input: &Mesh, opts: &DetectOptions) -> Result<Features> {
+    let t = std::time::Instant::now();
+    let op = if input.faces.is_empty() {
+        Some(oriented_points(input, opts.normal_neighbours)?)
+    } else {
+        None
+    };
+    let mut f = detect_oriented(input, op.as_ref(), opts)?;
+    f.seconds = t.elapsed().as_secs_f64();
+    Ok(f)
+}
+
+/// [`detect`] with a cloud's oriented points already at hand (`fit` has them): `op` is used
+/// when `input` has no faces and must then be given.
+pub fn detect_oriented(
+    input: &Mesh,
+    op: Option<&OrientedPoints>,
+    opts: &DetectOptions,
+) -> Result<Features> {
     let t = std::time::Instant::now();
     if !(opts.angle_deg > 0.0 && opts.angle_deg < 180.0) {
         return Err(Error::InvalidOption(format!(
@@ -106,7 +158,10 @@ pub fn detect(input: &Mesh, opts: &DetectOptions) -> Result<Features> {
         )));
     }
     let mut f = if input.faces.is_empty() {
-        detect_cloud(input, opts)?
+        let op = op.ok_or_else(|| {
+            Error::InvalidOption("feature detection on a cloud needs its oriented points".into())
+        })?;
+        detect_cloud(op, opts)?
     } else {
         detect_mesh(input, opts)?
     };
@@ -136,8 +191,7 @@ fn diagonal(points: &[Point3<f64>]) -> f64 {
     }
 }
 
-fn detect_cloud(input: &Mesh, opts: &DetectOptions) -> Result<Features> {
-    let op = oriented_points(input, opts.normal_neighbours)?;
+fn detect_cloud(op: &OrientedPoints, opts: &DetectOptions) -> Result<Features> {
     let points = &op.points[..op.original];
     let normals = &op.normals[..op.original];
     let kd = KdTree::build(points)?;

@@ -45,6 +45,10 @@ pub struct FitOptions {
     /// [`APRON_MAX_INTERVALS`] sample intervals per side instead of 16, so that with the two
     /// apron spans OpenCASCADE still samples them on its uniform grid.
     pub apron_unit: Option<crate::export::LengthUnit>,
+    /// Find the input's sharp features and report them (`features` in the report;
+    /// [`crate::features`]); `None` (default) skips the detection. The later stages do not use
+    /// them yet.
+    pub features: Option<crate::features::DetectOptions>,
 }
 
 /// Most sample intervals per patch side when the STEP writer extends the patches' surfaces:
@@ -65,6 +69,7 @@ impl Default for FitOptions {
             normal_neighbours: 12,
             jump_samples: 5,
             apron_unit: Some(crate::export::LengthUnit::Millimetre),
+            features: None,
         }
     }
 }
@@ -73,6 +78,8 @@ impl Default for FitOptions {
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct FitTimings {
     pub normals: f64,
+    /// Sharp features (`--features`; 0 without).
+    pub features: f64,
     pub implicit: f64,
     pub net: f64,
     pub sampling: f64,
@@ -120,6 +127,9 @@ pub struct FitReport {
     /// ([`crate::export::apron`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub step: Option<crate::export::apron::ApronSummary>,
+    /// The input's sharp features (`fit --features`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub features: Option<crate::features::detect::FeatureSummary>,
     pub timings: FitTimings,
 }
 
@@ -156,6 +166,17 @@ pub fn fit_measured(
     let t = Instant::now();
     let op = oriented_points(input, opts.normal_neighbours)?;
     timings.normals = t.elapsed().as_secs_f64();
+
+    let features = match &opts.features {
+        Some(fo) => {
+            progress("features", 0.03);
+            let t = Instant::now();
+            let found = crate::features::detect::detect_oriented(input, Some(&op), fo)?;
+            timings.features = t.elapsed().as_secs_f64();
+            Some(found.summary())
+        }
+        None => None,
+    };
 
     progress("implicit", 0.05);
     let t = Instant::now();
@@ -263,6 +284,7 @@ pub fn fit_measured(
         support,
         hole_fill: None,
         step: None,
+        features,
         timings,
     };
     Ok((network, report))

@@ -274,3 +274,41 @@ fn render_draws_the_creases_and_corners() {
     );
     assert!(!png.exists());
 }
+
+/// `fit --features` carries the same summary in its report (counts, crease length, noise), from
+/// a mesh and from a noisy cloud; without the flag the report has none.
+#[test]
+fn fit_report_carries_the_features_summary() {
+    let Some(dir) = parts() else { return };
+    let out = common::scratch_dir("cli_features_fit");
+    for (input, method) in [("block.stl", "mesh"), ("bracket.xyz", "cloud")] {
+        let step = out.join(format!("{input}.step"));
+        let r = common::fit_report(&dir.join(input), &step, &["--patches", "150", "--features"]);
+        let s = &r["features"];
+        assert_eq!(s["method"], method, "{s}");
+        // The same counts as `scansurf features` (see the tests above): make_parts' block has
+        // 10 faces, 17 creases, 8 corners as a mesh; the bracket 9, 20, 10 as a cloud.
+        let expect = if method == "mesh" {
+            [10.0, 17.0, 8.0]
+        } else {
+            [9.0, 20.0, 10.0]
+        };
+        assert_eq!(
+            [f(s, &["regions"]), f(s, &["creases"]), f(s, &["corners"])],
+            expect,
+            "{s}"
+        );
+        assert!(f(s, &["crease_length_rel"]) > 5.0, "{s}");
+        assert!(f(&r, &["timings", "features"]) > 0.0);
+        if method == "cloud" {
+            let noise = f(s, &["noise"]);
+            assert!(noise > 0.005 && noise < 0.02, "{s}");
+        }
+    }
+    let r = common::fit_report(
+        &dir.join("block.stl"),
+        &out.join("plain.step"),
+        &["--patches", "150"],
+    );
+    assert!(r.get("features").is_none());
+}
