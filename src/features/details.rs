@@ -63,28 +63,35 @@ pub fn absorb_details(
                 *l = map[*l as usize];
             }
         }
-        let mut merged: Vec<RegionPair> = Vec::new();
-        for p in &pairs {
-            let (a, b) = (map[p.a as usize], map[p.b as usize]);
-            if a == b {
-                continue;
-            }
-            let (a, b) = (a.min(b), a.max(b));
-            match merged.iter_mut().find(|q| q.a == a && q.b == b) {
-                Some(q) => {
-                    if p.boundary_samples > q.boundary_samples {
-                        q.dihedral_deg = p.dihedral_deg;
-                    }
-                    q.boundary_samples += p.boundary_samples;
-                }
-                None => merged.push(RegionPair { a, b, ..*p }),
-            }
-        }
-        merged.sort_by_key(|p| (p.a, p.b));
-        pairs = merged;
+        pairs = remap_pairs(&pairs, &map);
         count = c;
     }
     (count, pairs)
+}
+
+/// The region pairs after regions were relabelled by `map` (old region -> new): pairs within
+/// one new region dropped, pairs that became one summed (boundary sizes added, the dihedral of
+/// the longest boundary kept), sorted.
+pub fn remap_pairs(pairs: &[RegionPair], map: &[u32]) -> Vec<RegionPair> {
+    let mut merged: Vec<RegionPair> = Vec::new();
+    for p in pairs {
+        let (a, b) = (map[p.a as usize], map[p.b as usize]);
+        if a == b {
+            continue;
+        }
+        let (a, b) = (a.min(b), a.max(b));
+        match merged.iter_mut().find(|q| q.a == a && q.b == b) {
+            Some(q) => {
+                if p.boundary_samples > q.boundary_samples {
+                    q.dihedral_deg = p.dihedral_deg;
+                }
+                q.boundary_samples += p.boundary_samples;
+            }
+            None => merged.push(RegionPair { a, b, ..*p }),
+        }
+    }
+    merged.sort_by_key(|p| (p.a, p.b));
+    merged
 }
 
 #[cfg(test)]

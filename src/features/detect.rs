@@ -157,7 +157,7 @@ pub fn detect_oriented(
             opts.angle_deg
         )));
     }
-    let mut f = if input.faces.is_empty() {
+    let found = if input.faces.is_empty() {
         let op = op.ok_or_else(|| {
             Error::InvalidOption("feature detection on a cloud needs its oriented points".into())
         })?;
@@ -165,16 +165,28 @@ pub fn detect_oriented(
     } else {
         detect_mesh(input, opts)?
     };
-    // (+ 0.0: an empty f64 sum is -0.0.)
-    f.crease_length = f.creases.iter().map(Crease::length).sum::<f64>() + 0.0;
-    f.region_points = vec![0; f.regions];
-    for &l in &f.label {
+    let mut region_points = vec![0; found.regions];
+    for &l in &found.label {
         if l != UNLABELLED {
-            f.region_points[l as usize] += 1;
+            region_points[l as usize] += 1;
         }
     }
-    f.seconds = t.elapsed().as_secs_f64();
-    Ok(f)
+    Ok(Features {
+        method: found.method,
+        noise: found.noise,
+        spacing: found.spacing,
+        diagonal: diagonal(&found.points),
+        angle_deg: opts.angle_deg,
+        regions: found.regions,
+        region_points,
+        // (+ 0.0: an empty f64 sum is -0.0.)
+        crease_length: found.creases.iter().map(Crease::length).sum::<f64>() + 0.0,
+        creases: found.creases,
+        corners: found.corners.iter().map(|c| [c.x, c.y, c.z]).collect(),
+        seconds: t.elapsed().as_secs_f64(),
+        points: found.points,
+        label: found.label,
+    })
 }
 
 fn diagonal(points: &[Point3<f64>]) -> f64 {
@@ -191,7 +203,7 @@ fn diagonal(points: &[Point3<f64>]) -> f64 {
     }
 }
 
-fn detect_cloud(op: &OrientedPoints, opts: &DetectOptions) -> Result<Features> {
+fn detect_cloud(op: &OrientedPoints, opts: &DetectOptions) -> Result<Found> {
     let points = &op.points[..op.original];
     let normals = &op.normals[..op.original];
     let kd = KdTree::build(points)?;
@@ -204,24 +216,31 @@ fn detect_cloud(op: &OrientedPoints, opts: &DetectOptions) -> Result<Features> {
     let labels = segment_cloud(points, normals, &kd, &cloud);
     let spacing = crate::reconstruct::mean_spacing(points, &kd);
     let (creases, corners) = cloud_creases(points, &labels, &kd, spacing, &opts.creases);
-    Ok(Features {
+    Ok(Found {
         method: "cloud",
         noise: labels.sigma,
         spacing,
-        diagonal: diagonal(points),
-        angle_deg: opts.angle_deg,
         regions: labels.regions,
-        region_points: Vec::new(),
         creases,
-        corners: corners.iter().map(|c| [c.x, c.y, c.z]).collect(),
-        crease_length: 0.0,
-        seconds: 0.0,
+        corners,
         points: points.to_vec(),
         label: labels.label,
     })
 }
 
-fn detect_mesh(input: &Mesh, opts: &DetectOptions) -> Result<Features> {
+/// What each kind of input yields, before the common figures are added.
+struct Found {
+    method: &'static str,
+    noise: f64,
+    spacing: f64,
+    regions: usize,
+    creases: Vec<Crease>,
+    corners: Vec<Point3<f64>>,
+    points: Vec<Point3<f64>>,
+    label: Vec<u32>,
+}
+
+fn detect_mesh(input: &Mesh, opts: &DetectOptions) -> Result<Found> {
     let mesh_opts = MeshOptions {
         crease_deg: opts.angle_deg,
         ..opts.mesh
@@ -255,18 +274,13 @@ fn detect_mesh(input: &Mesh, opts: &DetectOptions) -> Result<Features> {
     }
     let kd = KdTree::build(&points)?;
     let noise = estimate_noise(&points, &normals, &kd, 20, 2000);
-    Ok(Features {
+    Ok(Found {
         method: "mesh",
         noise,
         spacing: input.mean_edge_length(),
-        diagonal: diagonal(&points),
-        angle_deg: opts.angle_deg,
         regions: labels.regions,
-        region_points: Vec::new(),
         creases,
-        corners: corners.iter().map(|c| [c.x, c.y, c.z]).collect(),
-        crease_length: 0.0,
-        seconds: 0.0,
+        corners,
         points,
         label,
     })

@@ -208,24 +208,7 @@ impl Segmentation {
         for l in self.label_of.iter_mut() {
             *l = map[*l as usize];
         }
-        let mut pairs: Vec<RegionPair> = Vec::new();
-        for p in &self.stats.pairs {
-            let (a, b) = (map[p.a as usize], map[p.b as usize]);
-            if a == b {
-                continue;
-            }
-            let (a, b) = (a.min(b), a.max(b));
-            match pairs.iter_mut().find(|q| q.a == a && q.b == b) {
-                Some(q) => {
-                    if p.boundary_samples > q.boundary_samples {
-                        q.dihedral_deg = p.dihedral_deg;
-                    }
-                    q.boundary_samples += p.boundary_samples;
-                }
-                None => pairs.push(RegionPair { a, b, ..*p }),
-            }
-        }
-        pairs.sort_by_key(|p| (p.a, p.b));
+        let pairs = details::remap_pairs(&self.stats.pairs, map);
         self.stats.pairs = pairs;
         self.stats.regions = self.regions.len();
         self.stats.region_points = self.regions.iter().map(|r| r.points.len()).collect();
