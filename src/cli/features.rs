@@ -23,23 +23,13 @@ pub struct Args {
     pub angle: Option<f64>,
 }
 
-fn check_ext(p: &std::path::Path, ext: &str, what: &str) -> Result<()> {
-    match p.extension().and_then(|e| e.to_str()) {
-        Some(e) if e.eq_ignore_ascii_case(ext) => Ok(()),
-        _ => Err(Error::InvalidOption(format!(
-            "{what} {} must end in .{ext}",
-            p.display()
-        ))),
-    }
-}
-
 pub fn run(a: Args, quiet: bool) -> Result<()> {
-    check_ext(&a.output, "json", "--output")?;
+    super::check_ext(&a.output, &["json"], "the features output")?;
     if let Some(p) = &a.ply {
-        check_ext(p, "ply", "--ply")?;
+        super::check_ext(p, &["ply"], "the creases file (--ply)")?;
     }
     if let Some(p) = &a.regions_ply {
-        check_ext(p, "ply", "--regions-ply")?;
+        super::check_ext(p, &["ply"], "the regions file (--regions-ply)")?;
     }
     let mut opts = DetectOptions::default();
     if let Some(angle) = a.angle {

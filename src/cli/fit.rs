@@ -80,22 +80,6 @@ pub struct Args {
 /// Unsupported patch area (fraction) above which `fit` warns.
 const UNSUPPORTED_WARNING: f64 = 0.05;
 
-fn check_ext(path: &Path, allowed: &[&str], what: &str) -> Result<()> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
-    if allowed.contains(&ext.as_str()) {
-        Ok(())
-    } else {
-        Err(Error::unsupported(
-            path,
-            format!("{what} must end in {}", allowed.join(" or ")),
-        ))
-    }
-}
-
 fn timestamp(a: &Args) -> Result<Option<Timestamp>> {
     if let Some(t) = &a.timestamp {
         return Timestamp::parse_iso8601(t).map(Some);
@@ -112,17 +96,17 @@ fn timestamp(a: &Args) -> Result<Option<Timestamp>> {
 }
 
 pub fn run(a: Args, quiet: bool) -> Result<()> {
-    check_ext(&a.output, &["step", "stp"], "the STEP output")?;
+    super::check_ext(&a.output, &["step", "stp"], "the STEP output")?;
     if let Some(i) = &a.iges {
-        check_ext(i, &["igs", "iges"], "the IGES output")?;
+        super::check_ext(i, &["igs", "iges"], "the IGES output")?;
     }
     if let Some(p) = &a.preview {
-        check_ext(p, &["png"], "the preview")?;
+        super::check_ext(p, &["png"], "the preview")?;
     }
     // Checked before the fit, so a typo does not cost a whole run.
     let (preview_w, preview_h) = crate::render::parse_size(&a.preview_size)?;
     if let Some(p) = &a.deviation_ply {
-        check_ext(p, &["ply"], "the deviation cloud")?;
+        super::check_ext(p, &["ply"], "the deviation cloud")?;
     }
     // `auto` is decided once the input is read (a mesh or a cloud).
     let auto_fill = a.fill_holes == "auto";

@@ -121,6 +121,25 @@ pub fn run() -> i32 {
     }
 }
 
+/// Refuses an output path whose extension is none of `allowed` (lower case, without the dot),
+/// naming the file and what it is for.
+pub(crate) fn check_ext(path: &std::path::Path, allowed: &[&str], what: &str) -> crate::Result<()> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    if allowed.contains(&ext.as_str()) {
+        Ok(())
+    } else {
+        let names: Vec<String> = allowed.iter().map(|e| format!(".{e}")).collect();
+        Err(crate::Error::unsupported(
+            path,
+            format!("{what} must end in {}", names.join(" or ")),
+        ))
+    }
+}
+
 /// Writes a report as pretty JSON, atomically.
 pub(crate) fn write_json<T: serde::Serialize>(
     path: &std::path::Path,

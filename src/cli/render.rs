@@ -93,10 +93,8 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     };
     let (mesh, lines, creases, corners) = match &focus {
         Some(f) => {
-            let (_, creases) = f.crop(mesh.clone(), &creases)?;
-            let (_, corners) = f.crop(mesh.clone(), &corners)?;
             let (mesh, lines) = f.crop(mesh, &lines)?;
-            (mesh, lines, creases, corners)
+            (mesh, lines, f.crop_lines(&creases), f.crop_lines(&corners))
         }
         None => (mesh, lines, creases, corners),
     };
@@ -139,12 +137,12 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         },
         render::LineLayer {
             lines: &creases,
-            color: [220, 30, 30],
+            color: crate::features::export::CREASE_COLOUR,
             width: 2.5 * opts.line_width,
         },
         render::LineLayer {
             lines: &corners,
-            color: [30, 60, 230],
+            color: crate::features::export::CORNER_COLOUR,
             width: 6.0 * opts.line_width,
         },
     ];

@@ -18,7 +18,7 @@ use super::segment_cloud::{segment_cloud, CloudOptions, NONE};
 use super::segment_mesh::{segment_mesh, MeshOptions};
 use crate::implicit::noise::estimate_noise;
 use crate::mesh::normals::vertex_normals;
-use crate::mesh::Mesh;
+use crate::mesh::{Aabb, Mesh};
 use crate::normals::{oriented_points, OrientedPoints};
 use crate::spatial::KdTree;
 use crate::{Error, Result};
@@ -175,7 +175,7 @@ pub fn detect_oriented(
         method: found.method,
         noise: found.noise,
         spacing: found.spacing,
-        diagonal: diagonal(&found.points),
+        diagonal: Aabb::of(&found.points).map_or(0.0, |b| b.diagonal()),
         angle_deg: opts.angle_deg,
         regions: found.regions,
         region_points,
@@ -187,20 +187,6 @@ pub fn detect_oriented(
         points: found.points,
         label: found.label,
     })
-}
-
-fn diagonal(points: &[Point3<f64>]) -> f64 {
-    let mut lo = Point3::from([f64::INFINITY; 3]);
-    let mut hi = Point3::from([f64::NEG_INFINITY; 3]);
-    for p in points {
-        lo = lo.inf(p);
-        hi = hi.sup(p);
-    }
-    if points.is_empty() {
-        0.0
-    } else {
-        (hi - lo).norm()
-    }
 }
 
 fn detect_cloud(op: &OrientedPoints, opts: &DetectOptions) -> Result<Found> {

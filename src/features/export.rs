@@ -7,6 +7,11 @@ use crate::Result;
 use nalgebra::Point3;
 use std::path::Path;
 
+/// Colour of the creases in the PLY and in `render --features`.
+pub const CREASE_COLOUR: [u8; 3] = [220, 30, 30];
+/// Colour of the corners in the PLY and in `render --features`.
+pub const CORNER_COLOUR: [u8; 3] = [30, 60, 230];
+
 /// A distinct colour per index (golden-angle hues), grey for unlabelled.
 pub fn region_colour(r: u32) -> [u8; 3] {
     if r == UNLABELLED {
@@ -52,11 +57,13 @@ pub fn write_lines_ply(path: &Path, f: &Features) -> Result<()> {
         )?;
         for c in &f.creases {
             for p in &c.points {
-                writeln!(w, "{} {} {} 220 30 30", p[0], p[1], p[2])?;
+                let [r, g, b] = CREASE_COLOUR;
+                writeln!(w, "{} {} {} {r} {g} {b}", p[0], p[1], p[2])?;
             }
         }
         for p in &f.corners {
-            writeln!(w, "{} {} {} 30 60 230", p[0], p[1], p[2])?;
+            let [r, g, b] = CORNER_COLOUR;
+            writeln!(w, "{} {} {} {r} {g} {b}", p[0], p[1], p[2])?;
         }
         let mut base = 0;
         for c in &f.creases {

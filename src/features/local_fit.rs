@@ -96,8 +96,8 @@ pub fn region_fit(
     for &j in idx {
         if label[j] == l {
             pts.push(points[j]);
-            // Normals summed on one side: an estimate that flipped a few (inside a small
-            // hole) must not cancel the axis.
+            // Normals summed on one side, so that any flipped by the estimate cannot cancel
+            // the axis (a guard: no flipped normals were seen on the test parts).
             let n = normals[j];
             axis += if axis.dot(&n) < 0.0 { -n } else { n };
         }

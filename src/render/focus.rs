@@ -75,6 +75,12 @@ impl Focus {
                 return Err(self.nothing());
             }
         }
+        Ok((mesh, self.crop_lines(lines)))
+    }
+
+    /// The runs of `lines` inside the ball (a line leaving and re-entering it gives two runs;
+    /// runs of fewer than two points are dropped).
+    pub fn crop_lines(&self, lines: &[Vec<Point3<f64>>]) -> Vec<Vec<Point3<f64>>> {
         let mut runs = Vec::new();
         for line in lines {
             let mut run: Vec<Point3<f64>> = Vec::new();
@@ -91,7 +97,7 @@ impl Focus {
                 runs.push(run);
             }
         }
-        Ok((mesh, runs))
+        runs
     }
 
     fn nothing(&self) -> Error {
