@@ -19,6 +19,7 @@ pub mod mesh;
 pub mod metrics;
 pub mod normals;
 pub mod nurbs;
+pub mod openings;
 pub mod polygonize;
 pub mod quality;
 pub mod reconstruct;

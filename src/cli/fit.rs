@@ -71,6 +71,13 @@ pub struct Args {
     /// do not follow them yet.
     #[arg(long)]
     pub features: bool,
+    /// What to do where the data stop (a part scanned on a table has no underside): `open`
+    /// fits only the scanned surface (an open shell); `smooth` closes every opening with the
+    /// implicit's smooth extension (a solid); `auto` closes when the data enclose a volume (at
+    /// most 5 % of the closed surface without points near it) and fits open otherwise. The
+    /// report's `close` says what was chosen and why.
+    #[arg(long, default_value = "auto", value_name = "auto|smooth|open")]
+    pub close: String,
     /// Header time stamp (ISO 8601, e.g. 2026-11-22T10:00:00). Default: SOURCE_DATE_EPOCH if
     /// set, else 1970-01-01T00:00:00, so the same input gives byte-identical files.
     #[arg(long)]
@@ -119,6 +126,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         })?),
     };
     let unit: LengthUnit = a.unit.parse()?;
+    let close: crate::openings::Close = a.close.parse()?;
     let extend_surfaces: ExtendSurfaces = a.extend_surfaces.parse()?;
     let stamp = timestamp(&a)?;
     let size = match (a.patches, a.patch_size) {
@@ -142,7 +150,8 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         let method = crate::smooth::Method::by_name("anisotropic")?.with_iterations(a.smooth);
         crate::smooth::run(&mut input, &adj, &method, None, &Default::default())?;
     }
-    if auto_fill && !input.faces.is_empty() {
+    // `--close open` keeps every opening open, the small holes of a mesh too.
+    if auto_fill && !input.faces.is_empty() && close != crate::openings::Close::Open {
         local_fill = Some(FillMethod::Rbf);
     }
     if local_fill.is_some() && input.faces.is_empty() {
@@ -177,6 +186,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         tolerance: a.tolerance,
         apron_unit: (extend_surfaces == ExtendSurfaces::Auto).then_some(unit),
         features: a.features.then(crate::features::DetectOptions::default),
+        close,
         ..FitOptions::default()
     };
     opts.implicit.tolerance = a.fit_tolerance;
@@ -237,6 +247,9 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         crate::render::patches::network_preview(&network, &pts, dist, &opts)?.save_png(p)?;
     }
     let support = &report.support;
+    if !quiet && report.close.requested == crate::openings::Close::Auto {
+        eprintln!("close: {}", report.close.reason);
+    }
     if support.unsupported_fraction > UNSUPPORTED_WARNING {
         eprintln!(
             "warning: {:.1}% of the patch area lies farther than {:.3e} (half a patch) from every \

@@ -4,10 +4,12 @@
 
 use crate::implicit::Implicit;
 use crate::mesh::Aabb;
+use crate::openings::{net_support, trim_to_data, Close, TrimReport};
 use crate::polygonize::net_smooth::{project_and_smooth, SmoothOptions, SmoothReport};
 use crate::polygonize::patch_count::{net_for_patch_count, PatchCountReport};
 use crate::polygonize::voxel_net::{build_voxel_net, VoxelNetOptions, VoxelNetStats};
 use crate::polygonize::QuadNet;
+use crate::spatial::KdTree;
 use crate::{Error, Result};
 use nalgebra::Point3;
 
@@ -43,6 +45,12 @@ pub struct NetReport {
     pub smoothing: SmoothReport,
     /// The grid placements tried (the kept one has the fewest folds).
     pub placements: Vec<PlacementTry>,
+    /// Share of the first closed voxel net without data nearby, and the trimming to the data
+    /// (`--close open`), shown in the report's `close` ([`crate::openings::ClosureReport`]).
+    #[serde(skip)]
+    pub unsupported_share: f64,
+    #[serde(skip)]
+    pub trim: Option<TrimReport>,
 }
 
 /// One placement of the voxel grid tried by [`fit_net`].
@@ -87,6 +95,8 @@ fn crossing_edges<I: Implicit + ?Sized>(f: &I, net: &QuadNet) -> usize {
 
 /// Builds, projects and smooths the quad net of f = 0 near `seeds` (points on or near the
 /// surface, e.g. the input cloud; at least one per surface component) within `bounds`.
+/// With `close` = `Close::Open` each voxel net is cut to the part the seeds support before it
+/// is projected ([`crate::openings`]); otherwise it stays closed.
 /// `score_net` measures a candidate net as patches (`None`: not measured) to rank the grid
 /// placements, and may return what it built (`P`, e.g. the trial sampling): the kept
 /// placement's is returned with its net, for the caller to go on from.
@@ -96,6 +106,7 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
     seeds: &[Point3<f64>],
     bounds: &Aabb,
     size: PatchSize,
+    close: Close,
     score_net: &(dyn Fn(&QuadNet) -> Option<(TrialScore, P)> + Sync),
 ) -> Result<(QuadNet, NetReport, Option<P>)> {
     let scale = bounds.diagonal();
@@ -122,6 +133,9 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
         }
     };
     let h = voxel_net.h;
+    let data = KdTree::build(seeds)?;
+    let (first_support, unsupported_share) = net_support(&voxel_net.net, &data, h);
+    let open = close == Close::Open;
     // Grid placements: the voxel grid shifted by 0, 1/3 and 2/3 of a voxel along the diagonal.
     // Where the surface is thinner than a voxel (the bunny's ears at 1,500 patches), whether
     // the net wraps the sheet cleanly or folds through it depends on how the grid happens to
@@ -141,9 +155,17 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
     let mut first_error: Option<Error> = None;
     // (folds, trial jumps, crossing edges), compared in that order.
     type Score = (usize, usize, usize);
-    let mut best: Option<(Score, QuadNet, SmoothReport, VoxelNetStats, Option<P>)> = None;
+    type Best<P> = (
+        Score,
+        QuadNet,
+        SmoothReport,
+        VoxelNetStats,
+        Option<P>,
+        Option<TrimReport>,
+    );
+    let mut best: Option<Best<P>> = None;
     for (k, frac) in [0.0, 1.0 / 3.0, 2.0 / 3.0].into_iter().enumerate() {
-        let (mut net, stats) = if k == 0 {
+        let (net, stats) = if k == 0 {
             (voxel_net.net.clone(), voxel_net.stats.clone())
         } else {
             let shift = nalgebra::Vector3::repeat(frac * h);
@@ -163,6 +185,24 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
                 continue;
             }
         }
+        // `--close open`: the net cut to the quads the data support, before projection (the
+        // unsupported part may have no zero set to project onto).
+        let (mut net, trim) = if open {
+            let support = if k == 0 {
+                first_support.clone()
+            } else {
+                net_support(&net, &data, h).0
+            };
+            match trim_to_data(&net, &support) {
+                Ok((t, r)) => (t, Some(r)),
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                    continue;
+                }
+            }
+        } else {
+            (net, None)
+        };
         let smoothing = match project_and_smooth(&mut net, f, &SmoothOptions::new(scale, h)) {
             Ok(s) => s,
             Err(e) => {
@@ -187,20 +227,22 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
             trial,
         });
         if best.as_ref().is_none_or(|b| score < b.0) {
-            best = Some((score, net, smoothing, stats, kept));
+            best = Some((score, net, smoothing, stats, kept, trim));
         }
     }
-    let Some((_, net, smoothing, voxel_stats, kept)) = best else {
+    let Some((_, net, smoothing, voxel_stats, kept, trim)) = best else {
         let why = first_error.map_or_else(String::new, |e| format!(" ({e})"));
         return Err(Error::Numerical(format!(
             "the quad net could not be projected onto the implicit surface{why}: parts of the \
              net lie where the implicit has no zero set within a voxel. This happens when the \
              input is not the surface of a solid the implicit can close (an open shell such \
-             as a car body with its windows and underside open); `scansurf reconstruct INPUT \
-             -o check.ply` shows the implicit"
+             as a car body with its windows and underside open): `--close open` fits only the \
+             scanned surface; `scansurf reconstruct INPUT -o check.ply` shows the implicit"
         )));
     };
     let report = NetReport {
+        unsupported_share,
+        trim,
         h,
         patches: net.quads.len(),
         nodes: net.nodes.len(),
@@ -230,17 +272,19 @@ mod tests {
         let b = aabb([-1.3, -1.3, -0.3], [1.3, 1.3, 0.3]);
         let seeds = seeds_on(&t, Point3::origin(), 1.4, 60);
         let none = |_: &QuadNet| None::<(TrialScore, ())>;
-        let (net, r, _) = fit_net(&t, &seeds, &b, PatchSize::Count(600), &none).unwrap();
+        let (net, r, _) =
+            fit_net(&t, &seeds, &b, PatchSize::Count(600), Close::Smooth, &none).unwrap();
         assert!((net.quads.len() as f64 - 600.0).abs() <= 90.0);
         assert_eq!(r.euler_characteristic, 0);
         assert_eq!(r.smoothing.smoothed.flipped, 0);
         let json = serde_json::to_string(&r).unwrap();
         assert!(json.contains("\"min_angle_deg\""));
-        let (net2, r2, _) = fit_net(&t, &seeds, &b, PatchSize::Edge(r.h), &none).unwrap();
+        let (net2, r2, _) =
+            fit_net(&t, &seeds, &b, PatchSize::Edge(r.h), Close::Smooth, &none).unwrap();
         assert_eq!(net2, net);
         assert!(r2.patch_count.is_none());
-        assert!(fit_net(&t, &seeds, &b, PatchSize::Edge(-1.0), &none).is_err());
-        assert!(fit_net(&t, &seeds, &b, PatchSize::Count(0), &none).is_err());
+        assert!(fit_net(&t, &seeds, &b, PatchSize::Edge(-1.0), Close::Smooth, &none).is_err());
+        assert!(fit_net(&t, &seeds, &b, PatchSize::Count(0), Close::Smooth, &none).is_err());
     }
 
     /// The whole net + samples pipeline on the Stanford bunny, with an IMLS implicit standing in
@@ -294,8 +338,15 @@ mod tests {
             f.1.store(0, Ordering::Relaxed);
             let t1 = Instant::now();
             let none = |_: &QuadNet| None::<(TrialScore, ())>;
-            let (net, r, _) =
-                fit_net(&f, &mesh.positions, &b, PatchSize::Count(target), &none).unwrap();
+            let (net, r, _) = fit_net(
+                &f,
+                &mesh.positions,
+                &b,
+                PatchSize::Count(target),
+                Close::Smooth,
+                &none,
+            )
+            .unwrap();
             let net_evals = f.1.load(Ordering::Relaxed);
             let t_net = t1.elapsed();
             eprintln!(

@@ -49,6 +49,9 @@ pub struct FitOptions {
     /// [`crate::features`]); `None` (default) skips the detection. The later stages do not use
     /// them yet.
     pub features: Option<crate::features::DetectOptions>,
+    /// What to do with the openings of the data (`--close`, default `auto`;
+    /// [`crate::openings`]).
+    pub close: crate::openings::Close,
 }
 
 /// Most sample intervals per patch side when the STEP writer extends the patches' surfaces:
@@ -70,6 +73,7 @@ impl Default for FitOptions {
             jump_samples: 5,
             apron_unit: Some(crate::export::LengthUnit::Millimetre),
             features: None,
+            close: crate::openings::Close::Auto,
         }
     }
 }
@@ -98,6 +102,8 @@ pub struct FitReport {
     pub normals_flipped: usize,
     pub normals_estimated: usize,
     pub bbox_diagonal: f64,
+    /// What `--close` chose and why.
+    pub close: crate::openings::ClosureReport,
     /// Tolerance asked for, absolute (model units).
     pub tolerance: f64,
     pub implicit: FitStats,
@@ -167,6 +173,11 @@ pub fn fit_measured(
     let op = oriented_points(input, opts.normal_neighbours)?;
     timings.normals = t.elapsed().as_secs_f64();
 
+    // `--close`: decided here, from the oriented points, before the expensive stages.
+    let enclosure = crate::openings::enclosure::escape_share(&op.points, &op.normals, 0.0);
+    let mut closure = crate::openings::choose(opts.close, enclosure);
+    let open = closure.chosen == crate::openings::Close::Open;
+
     let features = match &opts.features {
         Some(fo) => {
             progress("features", 0.03);
@@ -180,7 +191,9 @@ pub fn fit_measured(
 
     progress("implicit", 0.05);
     let t = Instant::now();
-    let f = PouImplicit::fit(&op.points, &op.normals, &opts.implicit)?;
+    let mut implicit_opts = opts.implicit.clone();
+    implicit_opts.bridge_openings &= !open;
+    let f = PouImplicit::fit(&op.points, &op.normals, &implicit_opts)?;
     timings.implicit = t.elapsed().as_secs_f64();
     let diag = f.diagonal();
     let bounds = Aabb::of(&op.points).ok_or_else(|| Error::Degenerate("no points".into()))?;
@@ -204,8 +217,12 @@ pub fn fit_measured(
         };
         Some((score, sampling))
     };
-    let (net, net_report, trial_sampling) = fit_net(&f, &op.points, &bounds, opts.size, &trial)?;
+    let (net, net_report, trial_sampling) =
+        fit_net(&f, &op.points, &bounds, opts.size, closure.chosen, &trial)?;
     timings.net = t.elapsed().as_secs_f64();
+    closure.unsupported_share = net_report.unsupported_share;
+    closure.support_radius = crate::openings::SUPPORT_RADIUS * net_report.h;
+    closure.trim = net_report.trim.clone();
 
     progress("sampling", 0.5);
     let t = Instant::now();
@@ -265,6 +282,7 @@ pub fn fit_measured(
         normals_flipped: op.flipped,
         normals_estimated: op.estimated,
         bbox_diagonal: diag,
+        close: closure,
         tolerance: tol,
         implicit: f.stats().clone(),
         net: net_report,

@@ -420,7 +420,7 @@ fn rebuild<I: Implicit + ?Sized>(
         .map(|&e| {
             let [lo, hi] = net.edges[e];
             let n = intervals[rib.of_edge[e] as usize];
-            let hint = net.edge_quads[e].iter().fold(Vector3::zeros(), |acc, &q| {
+            let hint = net.quads_of_edge(e).fold(Vector3::zeros(), |acc, q| {
                 let p = net.quads[q as usize].map(|k| net.nodes[k as usize]);
                 acc + (p[2] - p[0]).cross(&(p[3] - p[1])).normalize()
             });

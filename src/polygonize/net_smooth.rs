@@ -108,9 +108,10 @@ pub fn project_and_smooth<I: Implicit + ?Sized>(
     let mut best = (projected, net.nodes.clone());
     let mut since = 0;
     let mut iterations = 0;
+    let pinned = net.boundary_nodes();
     for _ in 0..opt.max_iterations {
         iterations += 1;
-        let moved = relax_step(net, &state.node_n, opt.step);
+        let moved = relax_step(net, &state.node_n, &pinned, opt.step);
         // A node that cannot be put back on the surface keeps its place.
         let (proj, normals) = project_on_lines(
             f,
@@ -256,12 +257,21 @@ fn nearest_on_lattice_lines<I: Implicit + ?Sized>(
 /// Tangential move of every node toward its relaxation target: the area-weighted centroid of
 /// its quads in the unrolled neighbourhood ([`super::log_map`]), so that a node beside a
 /// crease sees the nodes beyond it at their distance along the surface, in the direction the
-/// surface takes, not at their chords' short shadows on its tangent plane.
-fn relax_step(net: &QuadNet, normals: &[Vector3<f64>], step: f64) -> Vec<Point3<f64>> {
+/// surface takes, not at their chords' short shadows on its tangent plane. `pinned` nodes (the
+/// boundary of an open net, whose centroid lies inside the net) stay.
+fn relax_step(
+    net: &QuadNet,
+    normals: &[Vector3<f64>],
+    pinned: &[bool],
+    step: f64,
+) -> Vec<Point3<f64>> {
     (0..net.nodes.len())
         .into_par_iter()
         .map(|i| {
             let p = net.nodes[i];
+            if pinned[i] {
+                return p;
+            }
             let n = normals[i];
             let unroll = |k: u32| {
                 let q = net.nodes[k as usize];

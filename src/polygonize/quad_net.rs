@@ -1,5 +1,6 @@
-//! A closed, oriented 2-manifold quad mesh (the "quad net" of seed 004 section 3) with the
-//! adjacency that smoothing, sampling and export need.
+//! An oriented 2-manifold quad mesh (the "quad net" of seed 004 section 3) with the adjacency
+//! that smoothing, sampling and export need: closed (the surface of a solid), or with a boundary
+//! (the scanned part of a surface, `fit --close open`, [`crate::openings`]).
 //!
 //! Inputs: node positions and quads `[a, b, c, d]`, counter-clockwise seen from outside (the
 //! outward normal is `(b - a) x (d - a)`). [`QuadNet::new`] builds and validates:
@@ -8,12 +9,20 @@
 //! - the quads around every node form one cycle (no vertex where two sheets touch);
 //! - every node is used, no quad repeats a node.
 //!
+//! [`QuadNet::new_open`] accepts, in addition, *boundary edges* used by one quad; the quads
+//! around a node then form one cycle (inner node) or one chain (boundary node: two boundary
+//! edges, so the boundary is a set of simple loops).
+//!
 //! Outputs: `edges` (sorted `[lo, hi]` pairs), `edge_quads` (the quad walking the edge lo -> hi,
-//! then the one walking it hi -> lo), `quad_edges` (edge of side k, which runs from corner k to
-//! corner k + 1), and a node -> quads table.
+//! then the one walking it hi -> lo; [`NO_QUAD`] on the missing side of a boundary edge),
+//! `quad_edges` (edge of side k, which runs from corner k to corner k + 1), and a node -> quads
+//! table.
 
 use crate::{Error, Result};
 use nalgebra::Point3;
+
+/// The missing quad of a boundary edge in [`QuadNet::edge_quads`].
+pub const NO_QUAD: u32 = u32::MAX;
 
 /// A closed, consistently oriented, 2-manifold quad mesh.
 #[derive(Debug, Clone, PartialEq)]
@@ -24,13 +33,15 @@ pub struct QuadNet {
     pub quads: Vec<[u32; 4]>,
     /// Undirected edges `[lo, hi]`, `lo < hi`, sorted.
     pub edges: Vec<[u32; 2]>,
-    /// Per edge: `[quad walking lo -> hi, quad walking hi -> lo]`.
+    /// Per edge: `[quad walking lo -> hi, quad walking hi -> lo]`; [`NO_QUAD`] on the open side
+    /// of a boundary edge.
     pub edge_quads: Vec<[u32; 2]>,
     /// Per quad: edge index of side k (from corner k to corner (k + 1) % 4).
     pub quad_edges: Vec<[u32; 4]>,
     /// Node -> incident quads as a compressed table: quads of node i are
     /// `node_quad_list[node_quad_offsets[i]..node_quad_offsets[i + 1]]`, in cyclic order
-    /// (counter-clockwise seen from outside).
+    /// (counter-clockwise seen from outside); at a boundary node the chain starts and ends at
+    /// the node's two boundary quads.
     pub node_quad_offsets: Vec<u32>,
     pub node_quad_list: Vec<u32>,
 }
@@ -39,6 +50,16 @@ impl QuadNet {
     /// Builds the adjacency and checks that the quads form a closed, consistently oriented
     /// 2-manifold. Errors name the first offending edge or node.
     pub fn new(nodes: Vec<Point3<f64>>, quads: Vec<[u32; 4]>) -> Result<QuadNet> {
+        Self::build(nodes, quads, false)
+    }
+
+    /// [`QuadNet::new`] for a net that may have a boundary: edges used by one quad are allowed,
+    /// every node's quads must form one cycle or one chain.
+    pub fn new_open(nodes: Vec<Point3<f64>>, quads: Vec<[u32; 4]>) -> Result<QuadNet> {
+        Self::build(nodes, quads, true)
+    }
+
+    fn build(nodes: Vec<Point3<f64>>, quads: Vec<[u32; 4]>, open: bool) -> Result<QuadNet> {
         let n = nodes.len();
         if quads.is_empty() {
             return Err(Error::Degenerate("quad net has no quads".into()));
@@ -87,9 +108,23 @@ impl QuadNet {
                 j += 1;
             }
             let uses = j - i;
+            if open && uses == 1 {
+                let one = half[i];
+                let e = edges.len() as u32;
+                edges.push([lo, hi]);
+                edge_quads.push(if one.2 {
+                    [one.3, NO_QUAD]
+                } else {
+                    [NO_QUAD, one.3]
+                });
+                quad_edges[one.3 as usize][one.4 as usize] = e;
+                i = j;
+                continue;
+            }
             if uses != 2 {
+                let needs = if open { "1 or 2" } else { "2" };
                 return Err(Error::Degenerate(format!(
-                    "edge {lo}-{hi} is used by {uses} quads (a closed 2-manifold needs 2)"
+                    "edge {lo}-{hi} is used by {uses} quads (a 2-manifold needs {needs})"
                 )));
             }
             // Sorted by `forward`: false (hi -> lo) first, then true (lo -> hi).
@@ -106,7 +141,7 @@ impl QuadNet {
             quad_edges[bwd.3 as usize][bwd.4 as usize] = e;
             i = j;
         }
-        let (node_quad_offsets, node_quad_list) = node_fans(n, &quads)?;
+        let (node_quad_offsets, node_quad_list) = node_fans(n, &quads, open)?;
         Ok(QuadNet {
             nodes,
             quads,
@@ -137,7 +172,71 @@ impl QuadNet {
         self.quads[q].iter().position(|&v| v == i)
     }
 
-    /// V - E + F; 2 per sphere-like component, 2 - 2g for genus g.
+    /// Whether edge `e` is used by one quad only.
+    pub fn is_boundary_edge(&self, e: usize) -> bool {
+        self.edge_quads[e].contains(&NO_QUAD)
+    }
+
+    /// Whether the net has boundary edges.
+    pub fn is_open(&self) -> bool {
+        self.edge_quads.iter().any(|q| q.contains(&NO_QUAD))
+    }
+
+    /// Per node: whether it lies on a boundary edge.
+    pub fn boundary_nodes(&self) -> Vec<bool> {
+        let mut b = vec![false; self.nodes.len()];
+        for (e, ends) in self.edges.iter().enumerate() {
+            if self.is_boundary_edge(e) {
+                b[ends[0] as usize] = true;
+                b[ends[1] as usize] = true;
+            }
+        }
+        b
+    }
+
+    /// The quads of edge `e` (one for a boundary edge, else two).
+    pub fn quads_of_edge(&self, e: usize) -> impl Iterator<Item = u32> + '_ {
+        self.edge_quads[e].iter().copied().filter(|&q| q != NO_QUAD)
+    }
+
+    /// The boundary as closed loops of nodes, each walked with the net on its left seen from
+    /// outside (the direction its quad walks the edge), in a deterministic order.
+    pub fn boundary_loops(&self) -> Vec<Vec<u32>> {
+        // Directed boundary edges a -> b as their quad walks them.
+        let mut next = std::collections::BTreeMap::new();
+        for (e, &[lo, hi]) in self.edges.iter().enumerate() {
+            match self.edge_quads[e] {
+                [q, NO_QUAD] if q != NO_QUAD => {
+                    next.insert(lo, hi);
+                }
+                [NO_QUAD, q] if q != NO_QUAD => {
+                    next.insert(hi, lo);
+                }
+                _ => {}
+            }
+        }
+        let mut loops = Vec::new();
+        let mut seen = std::collections::BTreeSet::new();
+        for (&start, _) in next.iter() {
+            if !seen.insert(start) {
+                continue;
+            }
+            let mut lp = vec![start];
+            let mut cur = start;
+            while let Some(&nx) = next.get(&cur) {
+                if nx == start || !seen.insert(nx) {
+                    break;
+                }
+                lp.push(nx);
+                cur = nx;
+            }
+            loops.push(lp);
+        }
+        loops
+    }
+
+    /// V - E + F; 2 per sphere-like component, 2 - 2g for genus g (minus one per boundary
+    /// loop).
     pub fn euler_characteristic(&self) -> i64 {
         self.nodes.len() as i64 - self.edges.len() as i64 + self.quads.len() as i64
     }
@@ -155,7 +254,7 @@ impl QuadNet {
             stack.push(start);
             while let Some(q) = stack.pop() {
                 for &e in &self.quad_edges[q] {
-                    for &o in &self.edge_quads[e as usize] {
+                    for o in self.quads_of_edge(e as usize) {
                         if comp[o as usize] == u32::MAX {
                             comp[o as usize] = count;
                             stack.push(o as usize);
@@ -186,8 +285,9 @@ impl QuadNet {
 ///
 /// Around node v, quad q = [.., prev, v, next, ..] is followed (counter-clockwise seen from
 /// outside) by the quad whose `next` is q's `prev`: walk that map from one quad and require
-/// that it returns after visiting every incident quad.
-fn node_fans(n: usize, quads: &[[u32; 4]]) -> Result<(Vec<u32>, Vec<u32>)> {
+/// that it returns after visiting every incident quad. With `open`, a fan may also be one
+/// chain: the walk starts at the quad no other quad is followed by and must visit all.
+fn node_fans(n: usize, quads: &[[u32; 4]], open: bool) -> Result<(Vec<u32>, Vec<u32>)> {
     let mut count = vec![0u32; n + 1];
     for quad in quads {
         for &v in quad {
@@ -221,7 +321,16 @@ fn node_fans(n: usize, quads: &[[u32; 4]]) -> Result<(Vec<u32>, Vec<u32>)> {
         }
         let mut ordered = Vec::with_capacity(fan.len());
         let mut used = vec![false; fan.len()];
-        let mut cur = 0usize;
+        // A chain starts at the quad that follows no other: no quad's `prev` is its `next`.
+        let start = if open {
+            (0..fan.len())
+                .find(|&s| !fan.iter().any(|f| f.1 == fan[s].2))
+                .unwrap_or(0)
+        } else {
+            0
+        };
+        let chain = open && !fan.iter().any(|f| f.1 == fan[start].2);
+        let mut cur = start;
         for _ in 0..fan.len() {
             if used[cur] {
                 break;
@@ -231,10 +340,18 @@ fn node_fans(n: usize, quads: &[[u32; 4]]) -> Result<(Vec<u32>, Vec<u32>)> {
             let want = fan[cur].1;
             match fan.iter().position(|f| f.2 == want) {
                 Some(nx) => cur = nx,
-                None => break,
+                None => {
+                    cur = usize::MAX;
+                    break;
+                }
             }
         }
-        if ordered.len() != fan.len() || cur != 0 {
+        let ends_right = if chain {
+            cur == usize::MAX
+        } else {
+            cur == start
+        };
+        if ordered.len() != fan.len() || !ends_right {
             return Err(Error::Degenerate(format!(
                 "node {v}: its {} quads do not form a single fan (two sheets touch there)",
                 fan.len()
@@ -314,7 +431,47 @@ pub(crate) mod tests {
         for q in &quads {
             quads2.push(q.map(|i| if i == 0 { 7 } else { i + 7 }));
         }
-        let err = QuadNet::new(nodes2, quads2).unwrap_err().to_string();
+        let err = QuadNet::new(nodes2.clone(), quads2.clone())
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("node 7"), "{err}");
+        // Open nets reject the pinched vertex too.
+        assert!(QuadNet::new_open(nodes2, quads2).is_err());
+    }
+
+    #[test]
+    fn open_box_has_one_boundary_loop_and_chains_at_its_nodes() {
+        let (nodes, mut quads) = cube();
+        quads.remove(0); // no bottom (z = 0)
+        let net = QuadNet::new_open(nodes, quads).unwrap();
+        assert!(net.is_open());
+        assert_eq!(net.edges.len(), 12);
+        assert_eq!(net.euler_characteristic(), 1);
+        let loops = net.boundary_loops();
+        assert_eq!(loops.len(), 1);
+        let mut lp = loops[0].clone();
+        lp.sort_unstable();
+        assert_eq!(lp, vec![0, 1, 2, 3]);
+        // Walked with the net on the left: the side quad walks 0 -> 1 (quad [0, 1, 5, 4]).
+        let i0 = loops[0].iter().position(|&v| v == 0).unwrap();
+        assert_eq!(loops[0][(i0 + 1) % 4], 1);
+        let b = net.boundary_nodes();
+        assert_eq!(b, vec![true, true, true, true, false, false, false, false]);
+        assert_eq!((0..12).filter(|&e| net.is_boundary_edge(e)).count(), 4);
+        // A bottom node's two quads form a chain from one boundary quad to the other, each
+        // following the previous counter-clockwise.
+        for v in 0..4u32 {
+            let fan = net.node_quads(v as usize);
+            assert_eq!(fan.len(), 2);
+            let prev_of = |q: u32| {
+                let quad = net.quads[q as usize];
+                let k = quad.iter().position(|&x| x == v).unwrap();
+                (quad[(k + 3) % 4], quad[(k + 1) % 4])
+            };
+            assert_eq!(prev_of(fan[1]).1, prev_of(fan[0]).0);
+        }
+        assert_eq!(net.components().1, 1);
+        // The closed constructor refuses it.
+        assert!(QuadNet::new(net.nodes.clone(), net.quads.clone()).is_err());
     }
 }

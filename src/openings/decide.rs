@@ -1,0 +1,94 @@
+//! The decision of `--close`, and the support of a closed voxel net by the data.
+//!
+//! **Decision** ([`choose`]), before the implicit is fitted: `auto` is `open` when the escape
+//! share of [`super::enclosure`] exceeds [`super::OPEN_ESCAPE`], else `smooth`.
+//!
+//! **Support** ([`net_support`]), on the first voxel net: a node (a lattice vertex, within
+//! about a voxel h of the zero set) is *supported* when an input point lies within
+//! r = [`super::SUPPORT_RADIUS`] h of it; a quad is supported when its four nodes are. The
+//! voxel net's quads all have area h^2, so the share of unsupported quads is the share of the
+//! implicit's closed surface the data do not back:
+//!
+//! ```text
+//! u = #{quads with a node farther than r from every point} / #quads
+//! ```
+//!
+//! `open` keeps the supported quads ([`super::trim`]); the report gives u either way.
+
+use super::enclosure::Enclosure;
+use super::Close;
+use crate::polygonize::QuadNet;
+use crate::spatial::KdTree;
+use rayon::prelude::*;
+
+/// What `--close` chose and why (the report's `close`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ClosureReport {
+    /// `--close` as given.
+    pub requested: Close,
+    /// What the fit did: `smooth` or `open`.
+    pub chosen: Close,
+    /// The ray test on the oriented input points.
+    pub enclosure: Enclosure,
+    /// Share of the closed voxel net's quads with a node farther than `support_radius` from
+    /// every input point (the surface the implicit adds where there are no data).
+    pub unsupported_share: f64,
+    /// The distance used (model units).
+    pub support_radius: f64,
+    /// The choice in words.
+    pub reason: String,
+    /// What the trimming to the data did (`open` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trim: Option<super::TrimReport>,
+}
+
+/// Decides `requested` from the ray test; the support fields are filled in by the net stage.
+pub fn choose(requested: Close, enclosure: Enclosure) -> ClosureReport {
+    let pct = 100.0 * enclosure.escape_share;
+    let bar = 100.0 * super::OPEN_ESCAPE;
+    let (chosen, reason) = match requested {
+        Close::Smooth => (
+            Close::Smooth,
+            format!("--close smooth: openings closed by the implicit ({pct:.1} % of the rays cast inward from the points leave the part)"),
+        ),
+        Close::Open => (
+            Close::Open,
+            format!("--close open: only the scanned surface is fitted ({pct:.1} % of the rays cast inward from the points leave the part)"),
+        ),
+        Close::Auto if enclosure.escape_share > super::OPEN_ESCAPE => (
+            Close::Open,
+            format!("the data do not enclose a volume: {pct:.1} % of the rays cast inward from the points leave the part (more than {bar:.0} %), so only the scanned surface is fitted"),
+        ),
+        Close::Auto => (
+            Close::Smooth,
+            format!("the data enclose a volume: {pct:.1} % of the rays cast inward from the points leave the part (at most {bar:.0} %), so openings are closed smoothly"),
+        ),
+    };
+    ClosureReport {
+        requested,
+        chosen,
+        enclosure,
+        unsupported_share: 0.0,
+        support_radius: 0.0,
+        reason,
+        trim: None,
+    }
+}
+
+/// Per quad of `net` (voxel edge `h`): all four nodes have an input point within
+/// [`super::SUPPORT_RADIUS`] h; and the unsupported share u of the module doc.
+pub fn net_support(net: &QuadNet, data: &KdTree, h: f64) -> (Vec<bool>, f64) {
+    let radius = super::SUPPORT_RADIUS * h;
+    let nodes: Vec<bool> = net
+        .nodes
+        .par_iter()
+        .map(|p| data.nearest(p).1 <= radius)
+        .collect();
+    let quads: Vec<bool> = net
+        .quads
+        .iter()
+        .map(|q| q.iter().all(|&k| nodes[k as usize]))
+        .collect();
+    let unsupported = quads.iter().filter(|&&s| !s).count();
+    (quads, unsupported as f64 / net.quads.len().max(1) as f64)
+}
