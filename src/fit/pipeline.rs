@@ -125,6 +125,9 @@ pub struct FitReport {
     /// Patch area farther than half a voxel (h / 2) from every point the implicit was fitted
     /// to: surface the data does not back (openings closed by extrapolation).
     pub support: SupportReport,
+    /// The same at 1 % of the bounding-box diagonal: surface clearly away from the data
+    /// (with `--close open` the bar is under 0.2 % of the area).
+    pub support_far: SupportReport,
     /// The local hole filling run before the fit (`--fill-holes rbf|planar|flat`), if any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hole_fill: Option<crate::holes::FillReport>,
@@ -223,6 +226,7 @@ pub fn fit_measured(
     closure.unsupported_share = net_report.unsupported_share;
     closure.support_radius = crate::openings::SUPPORT_RADIUS * net_report.h;
     closure.trim = net_report.trim.clone();
+    closure.rim = net_report.rim.clone();
 
     progress("sampling", 0.5);
     let t = Instant::now();
@@ -239,6 +243,7 @@ pub fn fit_measured(
     let grids: Vec<&Vec<Vec<nalgebra::Point3<f64>>>> =
         sampling.patches.iter().map(|p| &p.points).collect();
     let support = surface_support(&grids, &data, 0.5 * net_report.h);
+    let support_far = surface_support(&grids, &data, 0.01 * diag);
 
     progress("patches", 0.7);
     let t = Instant::now();
@@ -300,6 +305,7 @@ pub fn fit_measured(
         continuity,
         folds,
         support,
+        support_far,
         hole_fill: None,
         step: None,
         features,

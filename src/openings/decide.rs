@@ -40,6 +40,9 @@ pub struct ClosureReport {
     /// What the trimming to the data did (`open` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub trim: Option<super::TrimReport>,
+    /// The rim carried to the data's edge (`open` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rim: Option<super::RimReport>,
 }
 
 /// Decides `requested` from the ray test; the support fields are filled in by the net stage.
@@ -72,6 +75,7 @@ pub fn choose(requested: Close, enclosure: Enclosure) -> ClosureReport {
         support_radius: 0.0,
         reason,
         trim: None,
+        rim: None,
     }
 }
 

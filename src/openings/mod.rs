@@ -18,9 +18,11 @@
 
 pub mod decide;
 pub mod enclosure;
+pub mod rim;
 pub mod trim;
 
 pub use decide::{choose, net_support, ClosureReport};
+pub use rim::{fit_rim, RimReport};
 pub use trim::{trim_to_data, TrimReport};
 
 /// How `fit` treats the openings of the data (`--close`).

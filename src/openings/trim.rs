@@ -6,9 +6,10 @@
 //!    point under one node should not punch a hole or a one-quad bite into the rim);
 //! 2. *spurs*: a kept quad with at most one kept edge-neighbour is dropped (a finger one quad
 //!    wide has no interior and makes a poor patch strip);
-//! 3. *pinches*: around every node the kept quads, in the node's cyclic fan, must form one run
-//!    (the node then lies inside the net or on one boundary loop); where they form several
-//!    (two pieces touching at a node), all runs but the longest are dropped.
+//! 3. *pinches*: around every node the kept quads, in the node's fan (a cycle, or a chain at a
+//!    node already on the boundary of an open input net), must form one run (the node then
+//!    lies inside the net or on one boundary loop); where they form several (two pieces
+//!    touching at a node), all runs but the longest are dropped.
 //!
 //! After 8 mixed passes only drops are made (spurs and pinches), which shrinks the kept set
 //! monotonically and so ends. Components with fewer than [`MIN_COMPONENT_SHARE`] of the largest
@@ -49,7 +50,8 @@ fn neighbours(net: &QuadNet, q: usize) -> impl Iterator<Item = usize> + '_ {
         .map(|o| o as usize)
 }
 
-/// Cuts the closed `net` to the quads flagged in `keep`, cleaned as the module doc says.
+/// Cuts `net` (closed, or open: [`super::rim`] cuts an open one again) to the quads flagged in
+/// `keep`, cleaned as the module doc says.
 /// Errors when nothing is left.
 pub fn trim_to_data(net: &QuadNet, keep: &[bool]) -> Result<(QuadNet, TrimReport)> {
     let mut rep = TrimReport {
@@ -58,6 +60,7 @@ pub fn trim_to_data(net: &QuadNet, keep: &[bool]) -> Result<(QuadNet, TrimReport
         ..Default::default()
     };
     let mut k = keep.to_vec();
+    let on_boundary = net.boundary_nodes();
     let mut pass = 0;
     loop {
         pass += 1;
@@ -81,8 +84,8 @@ pub fn trim_to_data(net: &QuadNet, keep: &[bool]) -> Result<(QuadNet, TrimReport
         for q in drop {
             k[q] = false;
         }
-        for v in 0..net.nodes.len() {
-            let dropped = drop_pinch(net.node_quads(v), &mut k);
+        for (v, &b) in on_boundary.iter().enumerate() {
+            let dropped = drop_pinch(net.node_quads(v), !b, &mut k);
             rep.pinch_quads_dropped += dropped;
             changed |= dropped > 0;
         }
@@ -118,21 +121,31 @@ pub fn trim_to_data(net: &QuadNet, keep: &[bool]) -> Result<(QuadNet, TrimReport
     Ok((out, rep))
 }
 
-/// Drops all runs but the longest (the first of equal ones) of kept quads in the cyclic `fan`
-/// of one node; returns how many quads were dropped.
-fn drop_pinch(fan: &[u32], k: &mut [bool]) -> usize {
+/// Drops all runs but the longest (the first of equal ones) of kept quads in the `fan` of one
+/// node (`cyclic`: its last quad is followed by its first); returns how many were dropped.
+fn drop_pinch(fan: &[u32], cyclic: bool, k: &mut [bool]) -> usize {
     let n = fan.len();
-    let on = |i: usize| k[fan[i % n] as usize];
-    // Start after a dropped quad so that no run wraps around the start.
-    let Some(start) = (0..n).find(|&i| !on(i)) else {
+    if n == 0 {
         return 0;
+    }
+    // Positions j = 1..=n along the fan. A cycle starts after a dropped quad so that no run
+    // wraps around the start; a chain starts at its first quad.
+    let start = if cyclic {
+        match (0..n).find(|&i| !k[fan[i] as usize]) {
+            Some(s) => s,
+            None => return 0,
+        }
+    } else {
+        n - 1
     };
+    let pos = |j: usize| (start + j) % n;
+    let on = |k: &[bool], j: usize| k[fan[pos(j)] as usize];
     let mut runs: Vec<(usize, usize)> = Vec::new(); // (first, length), positions from start + 1
     let mut i = 1;
     while i <= n {
-        if on(start + i) {
+        if on(k, i) {
             let first = i;
-            while i <= n && on(start + i) {
+            while i <= n && on(k, i) {
                 i += 1;
             }
             runs.push((first, i - first));
@@ -152,7 +165,7 @@ fn drop_pinch(fan: &[u32], k: &mut [bool]) -> usize {
             continue;
         }
         for j in first..first + len {
-            k[fan[(start + j) % n] as usize] = false;
+            k[fan[pos(j)] as usize] = false;
             dropped += 1;
         }
     }
@@ -280,13 +293,16 @@ mod tests {
         for q in [10, 12, 13] {
             k[q] = true;
         }
-        assert_eq!(drop_pinch(&fan, &mut k), 1);
+        assert_eq!(drop_pinch(&fan, true, &mut k), 1);
         assert!(!k[10] && k[12] && k[13]);
         // One run wrapping around the fan's start is one run.
         let mut k = vec![false; 16];
         for q in [10, 11, 15] {
             k[q] = true;
         }
-        assert_eq!(drop_pinch(&fan, &mut k), 0);
+        assert_eq!(drop_pinch(&fan, true, &mut k), 0);
+        // In a chain (a boundary node) the two ends are two runs: the longer stays.
+        assert_eq!(drop_pinch(&fan, false, &mut k), 1);
+        assert!(k[10] && k[11] && !k[15]);
     }
 }

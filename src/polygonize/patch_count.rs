@@ -37,6 +37,18 @@ pub fn net_for_patch_count<I: Implicit + ?Sized>(
     bounds: &Aabb,
     target: usize,
 ) -> Result<(VoxelNet, PatchCountReport)> {
+    net_for_patch_count_by(f, seeds, bounds, target, &|v: &VoxelNet| v.net.quads.len())
+}
+
+/// [`net_for_patch_count`] with the patches a net will give counted by `count` (e.g. the
+/// quads left after cutting the net to the data, `fit --close open`).
+pub fn net_for_patch_count_by<I: Implicit + ?Sized>(
+    f: &I,
+    seeds: &[Point3<f64>],
+    bounds: &Aabb,
+    target: usize,
+    count: &dyn Fn(&VoxelNet) -> usize,
+) -> Result<(VoxelNet, PatchCountReport)> {
     const AIM: f64 = 0.05;
     const MAX_BUILDS: usize = 10;
     if target == 0 {
@@ -56,7 +68,7 @@ pub fn net_for_patch_count<I: Implicit + ?Sized>(
     let mut best: Option<(f64, VoxelNet)> = None;
     for _ in 0..MAX_BUILDS {
         let v = build_voxel_net(f, seeds, bounds, &VoxelNetOptions::new(h))?;
-        let count = v.net.quads.len();
+        let count = count(&v).max(1);
         tries.push((h, count));
         let err = (count as f64 - n).abs() / n;
         if best.as_ref().is_none_or(|(e, _)| err < *e) {
