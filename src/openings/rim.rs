@@ -13,7 +13,10 @@
 //!    step projected back onto f = 0, while an input point lies within r_e = max(1.5 s, h / 16)
 //!    of it (s the points' spacing): its end c_i is its last point on the data, at least
 //!    [`MIN_STRIP`] h and at most [`MAX_STRIP`] h from b_i. The ends are smoothed along their
-//!    loop (three sweeps of c_i <- (c_{i-1} + 2 c_i + c_{i+1}) / 4, projected onto f = 0), and
+//!    loop (three sweeps of c_i <- (c_{i-1} + 2 c_i + c_{i+1}) / 4, projected onto f = 0; a
+//!    move that would leave the data is not made: smoothing cuts a concave bay's chord across
+//!    the unscanned side, measured 0.26 -> 1.1 % of the front half of the bunny's area past 1 %
+//!    of the diagonal), and
 //!    every boundary edge b_i b_{i+1} gets the quad [b_{i+1}, b_i, c_i, c_{i+1}] (its outward
 //!    normal (b_i - b_{i+1}) x (c_{i+1} - b_{i+1}) is along N). The staircase becomes interior
 //!    (a convex step's node gets two quads of about 135 degrees, a concave one two of about
@@ -210,7 +213,11 @@ fn strip<I: Implicit + ?Sized>(
                     let avg =
                         (c[(i + m - 1) % m].coords + 2.0 * c[i].coords + c[(i + 1) % m].coords)
                             / 4.0;
-                    project(f, Point3::from(avg), &newton).map_or(c[i], |r| r.0)
+                    // Only along or into the data: a smoothed end past the edge stays.
+                    match project(f, Point3::from(avg), &newton) {
+                        Ok((q, _)) if data.nearest(&q).1 <= edge_radius => q,
+                        _ => c[i],
+                    }
                 })
                 .collect();
         }
