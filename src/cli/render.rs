@@ -91,12 +91,15 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         }
         None => (Vec::new(), Vec::new()),
     };
-    let (mesh, lines, creases, corners) = match &focus {
+    // A STEP model's open boundary (sides no other face shares), over its patch boundaries.
+    let open = render::patches::open_sides(&lines);
+    let (mesh, lines, creases, corners, open) = match &focus {
         Some(f) => {
             let (mesh, lines) = f.crop(mesh, &lines)?;
-            (mesh, lines, f.crop_lines(&creases), f.crop_lines(&corners))
+            let (cr, co) = (f.crop_lines(&creases), f.crop_lines(&corners));
+            (mesh, lines, cr, co, f.crop_lines(&open))
         }
-        None => (mesh, lines, creases, corners),
+        None => (mesh, lines, creases, corners, open),
     };
     let opts = RenderOptions {
         width,
@@ -134,6 +137,11 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
             lines: &lines,
             color: opts.line_color,
             width: opts.line_width,
+        },
+        render::LineLayer {
+            lines: &open,
+            color: render::patches::OPEN_EDGE_COLOUR,
+            width: 2.5 * opts.line_width,
         },
         render::LineLayer {
             lines: &creases,

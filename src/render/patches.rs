@@ -2,17 +2,78 @@
 //! every face tessellated on a grid of its parameter rectangle with the surface's own unit
 //! normals `S_u × S_v / |S_u × S_v|` (flipped where the face's sense is reversed), shaded, and
 //! the boundary of each face's parameter domain drawn on top as a dark closed polyline, so the
-//! patch network is visible.
+//! patch network is visible. Sides no other face shares (the boundary of an open shell, what
+//! `fit --close open` leaves where the data stop) are drawn over them in [`OPEN_EDGE_COLOUR`].
 //!
 //! The grid density adapts to the face count: about [`TARGET_TRIANGLES`] triangles in all,
 //! between 4 and 32 intervals per side of a face.
 
-use super::{render_mesh, ColorScale, Image, RenderOptions};
+use super::{render_mesh_layers, ColorScale, Image, LineLayer, RenderOptions};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::nurbs::{BSplineSurface, PatchNetwork};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
+
+/// Colour of the open boundary (face sides shared by no other face).
+pub const OPEN_EDGE_COLOUR: [u8; 3] = [235, 120, 20];
+
+/// The sides of the face outlines of [`tessellate_faces`] (each `4 n + 1` points, side k the
+/// points `k n ..= (k + 1) n`) that no other side matches: both ends and the middle point
+/// within 1e-6 of the model's size of another side's (in either direction). Shared sides of a
+/// sewn network evaluate the same curve on both faces, so they match far closer than that.
+pub fn open_sides(outlines: &[Vec<Point3<f64>>]) -> Vec<Vec<Point3<f64>>> {
+    let sides: Vec<&[Point3<f64>]> = outlines
+        .iter()
+        .filter(|o| o.len() >= 5 && (o.len() - 1) % 4 == 0)
+        .flat_map(|o| {
+            let n = (o.len() - 1) / 4;
+            (0..4).map(move |k| &o[k * n..=(k + 1) * n])
+        })
+        .collect();
+    let mids: Vec<Point3<f64>> = sides.iter().map(|s| s[s.len() / 2]).collect();
+    let Some(bb) = crate::mesh::Aabb::of(&mids) else {
+        return Vec::new();
+    };
+    let tol = 1e-6 * bb.diagonal().max(f64::MIN_POSITIVE);
+    let Ok(tree) = crate::spatial::KdTree::build(&mids) else {
+        return Vec::new();
+    };
+    let close = |a: &Point3<f64>, b: &Point3<f64>| (a - b).norm() <= tol;
+    (0..sides.len())
+        .into_par_iter()
+        .filter(|&i| {
+            let s = sides[i];
+            let (a, b) = (s[0], s[s.len() - 1]);
+            !tree.within(&mids[i], tol).into_iter().any(|j| {
+                let o = sides[j];
+                let (c, d) = (o[0], o[o.len() - 1]);
+                j != i && ((close(&a, &c) && close(&b, &d)) || (close(&a, &d) && close(&b, &c)))
+            })
+        })
+        .map(|i| sides[i].to_vec())
+        .collect()
+}
+
+/// The patch boundaries in the options' line colour and the open boundary over them.
+fn outline_layers<'a>(
+    lines: &'a [Vec<Point3<f64>>],
+    open: &'a [Vec<Point3<f64>>],
+    opts: &RenderOptions,
+) -> [LineLayer<'a>; 2] {
+    [
+        LineLayer {
+            lines,
+            color: opts.line_color,
+            width: opts.line_width,
+        },
+        LineLayer {
+            lines: open,
+            color: OPEN_EDGE_COLOUR,
+            width: 2.5 * opts.line_width,
+        },
+    ]
+}
 
 /// Triangle budget of a whole picture's tessellation.
 pub const TARGET_TRIANGLES: usize = 600_000;
@@ -112,13 +173,15 @@ pub fn tessellate_faces(faces: &[FaceRef], n: usize) -> (Mesh, Vec<Vec<Point3<f6
     (mesh, lines)
 }
 
-/// Renders faces shaded grey with their patch boundaries as dark lines.
+/// Renders faces shaded grey with their patch boundaries as dark lines and the open boundary
+/// in [`OPEN_EDGE_COLOUR`].
 pub fn render_faces(faces: &[FaceRef], opts: &RenderOptions) -> Result<Image> {
     if faces.is_empty() {
         return Err(Error::Degenerate("nothing to render: no faces".into()));
     }
     let (mesh, lines) = tessellate_faces(faces, resolution(faces.len()));
-    render_mesh(&mesh, None, &lines, opts)
+    let open = open_sides(&lines);
+    render_mesh_layers(&mesh, None, &outline_layers(&lines, &open, opts), opts)
 }
 
 /// The faces of a network, for [`render_faces`].
@@ -148,16 +211,18 @@ pub fn network_preview(
         return Err(Error::Degenerate("nothing to render: no patches".into()));
     }
     let (mesh, lines) = tessellate_faces(&faces, resolution(faces.len()));
+    let open = open_sides(&lines);
+    let layers = outline_layers(&lines, &open, opts);
     let dev = deviation.filter(|d| d.len() == points.len() && !points.is_empty());
     let Some(dev) = dev else {
-        return render_mesh(&mesh, None, &lines, opts);
+        return render_mesh_layers(&mesh, None, &layers, opts);
     };
     let Some((scalars, scale)) = point_deviation_colours(&mesh.positions, points, dev)? else {
-        return render_mesh(&mesh, None, &lines, opts);
+        return render_mesh_layers(&mesh, None, &layers, opts);
     };
     let mut o = opts.clone();
     o.legend_title = "point deviation".into();
-    render_mesh(&mesh, Some((&scalars, scale)), &lines, &o)
+    render_mesh_layers(&mesh, Some((&scalars, scale)), &layers, &o)
 }
 
 /// Per-vertex scalars and their colour scale for a surface coloured by the deviation of nearby
@@ -294,6 +359,10 @@ mod tests {
         assert_eq!(lines.len(), 2);
         assert_eq!(lines[0].len(), 21);
         assert_eq!(lines[0][0], lines[0][20]);
+        // Two separate faces: all eight sides are open; a face with itself twice: none.
+        assert_eq!(open_sides(&lines).len(), 8);
+        let twice = vec![lines[0].clone(), lines[0].iter().rev().copied().collect()];
+        assert!(open_sides(&twice).is_empty());
         // The outline passes the four corners.
         for (u, v) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
             let c = a.evaluate(u, v);
