@@ -19,7 +19,7 @@ use rayon::prelude::*;
 pub const OPEN_EDGE_COLOUR: [u8; 3] = [235, 120, 20];
 
 /// The sides of the face outlines of [`tessellate_faces`] (each `4 n + 1` points, side k the
-/// points `k n ..= (k + 1) n`) that no other side matches: both ends and the middle point
+/// points `k n ..= (k + 1) n`) that no other side matches: both ends and the mean point
 /// within 1e-6 of the model's size of another side's (in either direction). Shared sides of a
 /// sewn network evaluate the same curve on both faces, so they match far closer than that.
 pub fn open_sides(outlines: &[Vec<Point3<f64>>]) -> Vec<Vec<Point3<f64>>> {
@@ -31,7 +31,11 @@ pub fn open_sides(outlines: &[Vec<Point3<f64>>]) -> Vec<Vec<Point3<f64>>> {
             (0..4).map(move |k| &o[k * n..=(k + 1) * n])
         })
         .collect();
-    let mids: Vec<Point3<f64>> = sides.iter().map(|s| s[s.len() / 2]).collect();
+    // The mean of a side's points: the same whichever way the side is walked.
+    let mids: Vec<Point3<f64>> = sides
+        .iter()
+        .map(|s| Point3::from(s.iter().map(|p| p.coords).sum::<Vector3<f64>>() / s.len() as f64))
+        .collect();
     let Some(bb) = crate::mesh::Aabb::of(&mids) else {
         return Vec::new();
     };
@@ -401,11 +405,18 @@ mod tests {
         let img = render_faces(&faces, &opts).unwrap();
         let s = img.stats(opts.background);
         assert!(s.foreground_fraction > 0.2, "{s:?}");
-        let dark = (0..img.height)
-            .flat_map(|y| (0..img.width).map(move |x| (x, y)))
+        let pixels = || (0..img.height).flat_map(|y| (0..img.width).map(move |x| (x, y)));
+        let dark = pixels()
             .filter(|&(x, y)| img.get(x, y).iter().all(|&c| c < 80))
             .count();
-        assert!(dark > 300, "{dark} dark pixels");
+        // The outer sides are the open boundary, in orange; the shared side is dark.
+        let orange = pixels()
+            .filter(|&(x, y)| {
+                let c = img.get(x, y);
+                c[0] > 190 && (80..170).contains(&c[1]) && c[2] < 90
+            })
+            .count();
+        assert!(dark > 30 && orange > 300, "{dark} dark, {orange} orange pixels");
         assert!(render_faces(&[], &opts).is_err());
     }
 }
