@@ -150,8 +150,23 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         let method = crate::smooth::Method::by_name("anisotropic")?.with_iterations(a.smooth);
         crate::smooth::run(&mut input, &adj, &method, None, &Default::default())?;
     }
-    // `--close open` keeps every opening open, the small holes of a mesh too.
-    if auto_fill && !input.faces.is_empty() && close != crate::openings::Close::Open {
+    // `--close open` keeps every opening open, the small holes of a mesh too; so does `auto`
+    // when it will choose open: decided here on the mesh as read, before a local fill could
+    // close the opening it is about (a scan mesh whose bottom was cut away).
+    let opens = match close {
+        crate::openings::Close::Open => true,
+        crate::openings::Close::Smooth => false,
+        crate::openings::Close::Auto => {
+            auto_fill && !input.faces.is_empty() && {
+                let op =
+                    crate::normals::oriented_points(&input, crate::normals::DEFAULT_NEIGHBOURS)
+                        .map_err(|e| super::with_input(e, &a.input))?;
+                let e = crate::openings::enclosure::escape_share(&op.points, &op.normals, 0.0);
+                e.escape_share > crate::openings::OPEN_ESCAPE
+            }
+        }
+    };
+    if auto_fill && !input.faces.is_empty() && !opens {
         local_fill = Some(FillMethod::Rbf);
     }
     if local_fill.is_some() && input.faces.is_empty() {

@@ -5,8 +5,8 @@
 //! data's edge, where the implicit only extrapolates. [`fit_rim`] then, on the projected net:
 //!
 //! 1. **Recut.** Every node now lies on f = 0; a quad is kept when its four nodes have an input
-//!    point within [`RECUT_RADIUS`] h (cleaned as in [`super::trim`]). The staircase now lies
-//!    inside the data.
+//!    point within min(2 r_e, [`RECUT_RADIUS`] h), r_e the edge radius below (cleaned as in
+//!    [`super::trim`]). The staircase now lies inside the data.
 //! 2. **Strip.** From every boundary node b_i (loops walked with the net on their left, seen
 //!    from outside) a path on the surface runs outward, along o_i = the mean of the adjacent
 //!    boundary edges' outward directions e x N in the tangent plane, in steps of h / 16, each
@@ -35,7 +35,10 @@ use crate::Result;
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
-/// A projected node is on the data when an input point lies within this many voxels.
+/// A projected node is on the data when an input point lies within this many edge radii r_e
+/// (so the staircase lies inside the data and the strip reaches out to their edge), and at
+/// most [`RECUT_RADIUS`] voxels.
+pub const RECUT_EDGES: f64 = 2.0;
 pub const RECUT_RADIUS: f64 = 0.35;
 /// Shortest and longest strip, in voxels.
 pub const MIN_STRIP: f64 = 0.25;
@@ -77,10 +80,12 @@ pub fn fit_rim<I: Implicit + ?Sized>(
     spacing: f64,
     smooth: &SmoothOptions,
 ) -> Result<(QuadNet, SmoothReport, RimReport)> {
+    let edge_radius = (EDGE_SPACINGS * spacing).max(h / STEPS_PER_VOXEL);
+    let recut_radius = (RECUT_EDGES * edge_radius).min(RECUT_RADIUS * h);
     let keep_nodes: Vec<bool> = net
         .nodes
         .par_iter()
-        .map(|p| data.nearest(p).1 <= RECUT_RADIUS * h)
+        .map(|p| data.nearest(p).1 <= recut_radius)
         .collect();
     let keep: Vec<bool> = net
         .quads
@@ -88,7 +93,6 @@ pub fn fit_rim<I: Implicit + ?Sized>(
         .map(|q| q.iter().all(|&v| keep_nodes[v as usize]))
         .collect();
     let (cut, recut) = trim_to_data(net, &keep)?;
-    let edge_radius = (EDGE_SPACINGS * spacing).max(h / STEPS_PER_VOXEL);
     let (nodes, quads, walk) = strip(&cut, f, data, h, edge_radius);
     let mut out = QuadNet::new_open(nodes, quads)?;
     let smoothing = project_and_smooth(&mut out, f, smooth)?;
@@ -213,9 +217,14 @@ fn strip<I: Implicit + ?Sized>(
                     let avg =
                         (c[(i + m - 1) % m].coords + 2.0 * c[i].coords + c[(i + 1) % m].coords)
                             / 4.0;
-                    // Only along or into the data: a smoothed end past the edge stays.
+                    // Only along or into the data: a move that takes an end farther from
+                    // the data than the edge radius and than it was is not made.
                     match project(f, Point3::from(avg), &newton) {
-                        Ok((q, _)) if data.nearest(&q).1 <= edge_radius => q,
+                        Ok((q, _))
+                            if data.nearest(&q).1 <= edge_radius.max(data.nearest(&c[i]).1) =>
+                        {
+                            q
+                        }
                         _ => c[i],
                     }
                 })
@@ -233,4 +242,86 @@ fn strip<I: Implicit + ?Sized>(
         rep.walk_max = walks.iter().fold(0.0f64, |a, &b| a.max(b)) / h;
     }
     (nodes, quads, rep)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::openings::{net_support, trim_to_data};
+    use crate::polygonize::test_shapes::*;
+    use crate::polygonize::voxel_net::{build_voxel_net, VoxelNetOptions};
+
+    /// The upper half of a sphere sampled densely: the rim ends on the equator, where the data
+    /// stop, smoothly (no staircase), with no folded quad.
+    #[test]
+    fn hemisphere_rim_lies_on_the_data_edge() {
+        let s = Sphere {
+            c: Point3::new(0.013, -0.021, 0.0),
+            r: 1.0,
+        };
+        let all = seeds_on(&s, s.c, 1.2, 40_000);
+        let data: Vec<Point3<f64>> = all.iter().copied().filter(|p| p.z > 0.0).collect();
+        let tree = KdTree::build(&data).unwrap();
+        let b = crate::mesh::Aabb {
+            min: Point3::new(-1.2, -1.2, -1.2),
+            max: Point3::new(1.2, 1.2, 1.2),
+        };
+        let h = 0.15;
+        let v = build_voxel_net(&s, &data, &b, &VoxelNetOptions::new(h)).unwrap();
+        let (support, share) = net_support(&v.net, &tree, h);
+        assert!(share > 0.3 && share < 0.7, "{share}");
+        let (mut net, _) = trim_to_data(&v.net, &support).unwrap();
+        let opts = SmoothOptions::new(b.diagonal(), h);
+        project_and_smooth(&mut net, &s, &opts).unwrap();
+        let spacing = crate::reconstruct::mean_spacing(&data, &tree);
+        let (out, smooth, rep) = fit_rim(&net, &s, &tree, h, spacing, &opts).unwrap();
+        assert!(out.is_open());
+        assert_eq!(out.boundary_loops().len(), 1);
+        assert_eq!(
+            smooth.smoothed.flipped + smooth.smoothed.degenerate,
+            0,
+            "{smooth:?}"
+        );
+        assert!(rep.strip_quads > 20, "{rep:?}");
+        // The boundary runs along the equator: within the edge radius plus a walk step below
+        // the data's last row, never above a quarter voxel (the staircase was up to a voxel).
+        let lp = &out.boundary_loops()[0];
+        let z: Vec<f64> = lp.iter().map(|&i| out.nodes[i as usize].z).collect();
+        let (lo, hi) = z
+            .iter()
+            .fold((f64::MAX, f64::MIN), |a, &x| (a.0.min(x), a.1.max(x)));
+        assert!(lo > -0.05 && hi < 0.25 * h, "boundary z in [{lo}, {hi}]");
+        // Smooth: consecutive boundary edges turn by little in the tangent plane.
+        let m = lp.len();
+        let p = |i: usize| out.nodes[lp[i % m] as usize];
+        let worst = (0..m)
+            .map(|i| {
+                let (a, c) = (
+                    (p(i + 1) - p(i)).normalize(),
+                    (p(i + 2) - p(i + 1)).normalize(),
+                );
+                a.dot(&c).clamp(-1.0, 1.0).acos().to_degrees()
+            })
+            .fold(0.0f64, f64::max);
+        if worst >= 45.0 {
+            for i in 0..m {
+                let (a, c) = (
+                    (p(i + 1) - p(i)).normalize(),
+                    (p(i + 2) - p(i + 1)).normalize(),
+                );
+                eprintln!(
+                    "{i} {:?} turn {:.1}",
+                    p(i + 1),
+                    a.dot(&c).clamp(-1.0, 1.0).acos().to_degrees()
+                );
+            }
+            eprintln!("{rep:?}");
+        }
+        assert!(worst < 45.0, "boundary turns by {worst} degrees");
+        // Every node is on the sphere.
+        assert!(out
+            .nodes
+            .iter()
+            .all(|q| ((q - s.c).norm() - 1.0).abs() < 1e-9));
+    }
 }

@@ -416,7 +416,10 @@ mod tests {
                 c[0] > 190 && (80..170).contains(&c[1]) && c[2] < 90
             })
             .count();
-        assert!(dark > 30 && orange > 300, "{dark} dark, {orange} orange pixels");
+        assert!(
+            dark > 30 && orange > 300,
+            "{dark} dark, {orange} orange pixels"
+        );
         assert!(render_faces(&[], &opts).is_err());
     }
 }

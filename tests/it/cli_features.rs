@@ -5,47 +5,17 @@
 
 use crate::common::{self, json_f64 as f};
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 fn tools() -> Option<PathBuf> {
-    let dir = std::env::var_os("SCANSURF_SHARED_DATA")
-        .map(|d| PathBuf::from(d).join("../tools"))
-        .unwrap_or_else(|| repo().join("../shared/tools"));
-    dir.join("make_parts.py").exists().then_some(dir)
+    common::shared_tools()
 }
 
-/// make_parts' block and bracket (200,000 points, noise 0.01 mm), made once per test run;
-/// `None` outside CI when the tools or the checker's venv are missing.
 fn parts() -> Option<&'static PathBuf> {
-    static PARTS: OnceLock<Result<PathBuf, String>> = OnceLock::new();
-    let (py, _) = common::checker()?;
-    let Some(tools) = tools() else {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI: ../shared/tools/make_parts.py is missing"
-        );
-        eprintln!("SKIPPED: no make_parts.py");
-        return None;
-    };
-    Some(common::shared(&PARTS, || {
-        let dir = common::scratch_dir("cli_features_parts");
-        let o = std::process::Command::new(&py)
-            .arg(tools.join("make_parts.py"))
-            .arg(&dir)
-            .args(["--parts", "block,bracket"])
-            .output()
-            .expect("run make_parts.py");
-        assert!(
-            o.status.success(),
-            "make_parts.py: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        dir
-    }))
+    common::make_parts()
 }
 
 /// Runs `scansurf features INPUT -o OUT.json --ply OUT.ply`, returns the JSON.

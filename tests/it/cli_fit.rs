@@ -350,6 +350,8 @@ fn extrapolated_area_is_reported_and_warned() {
         "300",
         "--fill-holes",
         "implicit",
+        "--close",
+        "smooth",
     ]);
     assert_eq!(code, 0, "{err}");
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();

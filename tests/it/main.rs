@@ -10,6 +10,7 @@ mod support;
 
 mod bad_inputs;
 mod cad_roundtrip;
+mod cli_close;
 mod cli_features;
 mod cli_fill_holes;
 mod cli_fit;

@@ -35,8 +35,20 @@ pub fn cad_check(
     model: &Path,
     points: Option<&Path>,
 ) -> serde_json::Value {
+    cad_check_with(python, script, model, points, &[])
+}
+
+/// [`cad_check`] with more arguments (e.g. `--no-jumps`, which skips the slow normal-jump
+/// sampling of a model with many faces).
+pub fn cad_check_with(
+    python: &Path,
+    script: &Path,
+    model: &Path,
+    points: Option<&Path>,
+    extra: &[&str],
+) -> serde_json::Value {
     let mut cmd = Command::new(python);
-    cmd.arg(script).arg(model);
+    cmd.arg(script).arg(model).args(extra);
     if let Some(p) = points {
         cmd.arg("--points").arg(p);
     }
@@ -139,4 +151,44 @@ pub fn shared<T: Send + Sync>(
         Ok(v) => v,
         Err(msg) => panic!("the shared computation failed: {msg}"),
     }
+}
+
+/// `$SCANSURF_SHARED_DATA/../tools`, else `../shared/tools` beside the crate, when it holds
+/// make_parts.py.
+pub fn shared_tools() -> Option<PathBuf> {
+    let dir = std::env::var_os("SCANSURF_SHARED_DATA")
+        .map(|d| PathBuf::from(d).join("../tools"))
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/tools"));
+    dir.join("make_parts.py").exists().then_some(dir)
+}
+
+/// make_parts' block and bracket (200,000 points, noise 0.01 mm; each as NAME.step, the exact
+/// truth, NAME.stl, NAME.xyz and NAME-occluded.xyz, seen from above), made once per test run;
+/// `None` outside CI when the tools or the checker's venv are missing.
+pub fn make_parts() -> Option<&'static PathBuf> {
+    static PARTS: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
+    let (py, _) = checker()?;
+    let Some(tools) = shared_tools() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI: ../shared/tools/make_parts.py is missing"
+        );
+        eprintln!("SKIPPED: no make_parts.py");
+        return None;
+    };
+    Some(shared(&PARTS, || {
+        let dir = scratch_dir("make_parts");
+        let o = std::process::Command::new(&py)
+            .arg(tools.join("make_parts.py"))
+            .arg(&dir)
+            .args(["--parts", "block,bracket"])
+            .output()
+            .expect("run make_parts.py");
+        assert!(
+            o.status.success(),
+            "make_parts.py: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        dir
+    }))
 }
