@@ -17,7 +17,7 @@ fn main() {
             }
         };
         let t = std::time::Instant::now();
-        let e = scansurf::openings::enclosure::escape_share(&op.points, &op.normals, 0.0);
+        let e = scansurf::openings::enclosure::escape_share(&op.points, &op.normals);
         println!(
             "{path}: escape share {:.4} ({} of {} rays), {:.3} s",
             e.escape_share,

@@ -161,8 +161,8 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
                 let op =
                     crate::normals::oriented_points(&input, crate::normals::DEFAULT_NEIGHBOURS)
                         .map_err(|e| super::with_input(e, &a.input))?;
-                let e = crate::openings::enclosure::escape_share(&op.points, &op.normals, 0.0);
-                e.escape_share > crate::openings::OPEN_ESCAPE
+                let e = crate::openings::enclosure::escape_share(&op.points, &op.normals);
+                crate::openings::choose(close, e).chosen == crate::openings::Close::Open
             }
         }
     };

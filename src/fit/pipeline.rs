@@ -177,7 +177,7 @@ pub fn fit_measured(
     timings.normals = t.elapsed().as_secs_f64();
 
     // `--close`: decided here, from the oriented points, before the expensive stages.
-    let enclosure = crate::openings::enclosure::escape_share(&op.points, &op.normals, 0.0);
+    let enclosure = crate::openings::enclosure::escape_share(&op.points, &op.normals);
     let mut closure = crate::openings::choose(opts.close, enclosure);
     let open = closure.chosen == crate::openings::Close::Open;
 

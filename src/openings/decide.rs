@@ -79,20 +79,23 @@ pub fn choose(requested: Close, enclosure: Enclosure) -> ClosureReport {
     }
 }
 
-/// Per quad of `net` (voxel edge `h`): all four nodes have an input point within
-/// [`super::SUPPORT_RADIUS`] h; and the unsupported share u of the module doc.
-pub fn net_support(net: &QuadNet, data: &KdTree, h: f64) -> (Vec<bool>, f64) {
-    let radius = super::SUPPORT_RADIUS * h;
+/// Per quad of `net`: all four nodes have an input point within `radius`.
+pub fn quads_near_data(net: &QuadNet, data: &KdTree, radius: f64) -> Vec<bool> {
     let nodes: Vec<bool> = net
         .nodes
         .par_iter()
         .map(|p| data.nearest(p).1 <= radius)
         .collect();
-    let quads: Vec<bool> = net
-        .quads
+    net.quads
         .iter()
         .map(|q| q.iter().all(|&k| nodes[k as usize]))
-        .collect();
+        .collect()
+}
+
+/// Per quad of `net` (voxel edge `h`): all four nodes have an input point within
+/// [`super::SUPPORT_RADIUS`] h; and the unsupported share u of the module doc.
+pub fn net_support(net: &QuadNet, data: &KdTree, h: f64) -> (Vec<bool>, f64) {
+    let quads = quads_near_data(net, data, super::SUPPORT_RADIUS * h);
     let unsupported = quads.iter().filter(|&&s| !s).count();
     (quads, unsupported as f64 / net.quads.len().max(1) as f64)
 }

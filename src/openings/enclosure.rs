@@ -14,8 +14,8 @@
 //! let few rays out, a block without its bottom the rays of its top and of its slots' floors (a
 //! third of them), a face scanned from the front nearly all.
 //!
-//! The rays march through an occupancy grid (cells of about [`CELLS`]-th of the diagonal, at
-//! least two point spacings) in which each cell keeps a bit per direction class of its points'
+//! The rays march through an occupancy grid (cells of a [`CELLS`]-th of the bounding box's
+//! longest side) in which each cell keeps a bit per direction class of its points'
 //! normals (the 26 directions of the cell's neighbours); the cells are dilated by one so that a
 //! ray cannot pass between two diagonal neighbours of a sampled surface. A cell is a hit when
 //! one of its directions lies within 60 degrees of the ray. Rays start from [`RAYS`] points
@@ -83,8 +83,7 @@ impl Grid {
 }
 
 /// The escape share of rays cast inward from the oriented points (see the module doc).
-/// `spacing` is the points' typical distance to their neighbours (0 if unknown).
-pub fn escape_share(points: &[Point3<f64>], normals: &[Vector3<f64>], spacing: f64) -> Enclosure {
+pub fn escape_share(points: &[Point3<f64>], normals: &[Vector3<f64>]) -> Enclosure {
     let none = Enclosure {
         rays: 0,
         escaped: 0,
@@ -98,7 +97,7 @@ pub fn escape_share(points: &[Point3<f64>], normals: &[Vector3<f64>], spacing: f
     if !(longest > 0.0 && longest.is_finite()) {
         return none;
     }
-    let cell = (longest / CELLS as f64).max(2.0 * spacing);
+    let cell = longest / CELLS as f64;
     // Two cells of margin: rays leave through empty cells.
     let min = b.min - Vector3::repeat(2.0 * cell);
     let dims = [ext.x, ext.y, ext.z].map(|e| (e / cell).ceil() as usize + 5);
@@ -215,21 +214,21 @@ mod tests {
     #[test]
     fn closed_sphere_encloses_and_a_cap_does_not() {
         let (p, n) = sphere(60_000, |_| true);
-        let e = escape_share(&p, &n, 0.0);
+        let e = escape_share(&p, &n);
         assert_eq!(e.rays, RAYS);
         assert!(e.escape_share < 0.01, "{e:?}");
         // A small hole (a cap of 10 degrees) lets few rays out.
         let (p, n) = sphere(60_000, |q| q.z < 0.985);
-        assert!(escape_share(&p, &n, 0.0).escape_share < 0.05);
+        assert!(escape_share(&p, &n).escape_share < 0.05);
         // The upper half: the rays of the upper half run out through the missing lower half.
         let (p, n) = sphere(60_000, |q| q.z > 0.0);
-        let e = escape_share(&p, &n, 0.0);
+        let e = escape_share(&p, &n);
         assert!(e.escape_share > 0.8, "{e:?}");
         // Normals flipped inward: every ray runs out.
         let (p, n) = sphere(20_000, |_| true);
         let n: Vec<_> = n.iter().map(|v| -v).collect();
-        assert!(escape_share(&p, &n, 0.0).escape_share > 0.95);
+        assert!(escape_share(&p, &n).escape_share > 0.95);
         // Nothing to look at.
-        assert_eq!(escape_share(&[], &[], 0.0).rays, 0);
+        assert_eq!(escape_share(&[], &[]).rays, 0);
     }
 }

@@ -82,16 +82,7 @@ pub fn fit_rim<I: Implicit + ?Sized>(
 ) -> Result<(QuadNet, SmoothReport, RimReport)> {
     let edge_radius = (EDGE_SPACINGS * spacing).max(h / STEPS_PER_VOXEL);
     let recut_radius = (RECUT_EDGES * edge_radius).min(RECUT_RADIUS * h);
-    let keep_nodes: Vec<bool> = net
-        .nodes
-        .par_iter()
-        .map(|p| data.nearest(p).1 <= recut_radius)
-        .collect();
-    let keep: Vec<bool> = net
-        .quads
-        .iter()
-        .map(|q| q.iter().all(|&v| keep_nodes[v as usize]))
-        .collect();
+    let keep = super::decide::quads_near_data(net, data, recut_radius);
     let (cut, recut) = trim_to_data(net, &keep)?;
     let (nodes, quads, walk) = strip(&cut, f, data, h, edge_radius);
     let mut out = QuadNet::new_open(nodes, quads)?;
