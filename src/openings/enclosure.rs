@@ -15,7 +15,7 @@
 //! third of them), a face scanned from the front nearly all.
 //!
 //! The rays march through an occupancy grid (cells of a [`CELLS`]-th of the bounding box's
-//! longest side) in which each cell keeps a bit per direction class of its points'
+//! longest side, at least two point spacings) in which each cell keeps a bit per direction class of its points'
 //! normals (the 26 directions of the cell's neighbours); the cells are dilated by one so that a
 //! ray cannot pass between two diagonal neighbours of a sampled surface. A cell is a hit when
 //! one of its directions lies within 60 degrees of the ray. Rays start from [`RAYS`] points
@@ -84,6 +84,36 @@ impl Grid {
 
 /// The escape share of rays cast inward from the oriented points (see the module doc).
 pub fn escape_share(points: &[Point3<f64>], normals: &[Vector3<f64>]) -> Enclosure {
+    escape_share_with_spacing(points, normals, spacing_of(points))
+}
+
+/// The points' spacing (mean distance to their nearest neighbours, on a sample of at most
+/// [`RAYS`] points): cells must be at least two spacings wide, or rays pass between the
+/// points of a sparse cloud (spot's 2,930 vertices as a cloud: escape share 15 % with cells of
+/// a 128th, 0.3 % with cells of two spacings).
+fn spacing_of(points: &[Point3<f64>]) -> f64 {
+    let Ok(kd) = crate::spatial::KdTree::build(points) else {
+        return 0.0;
+    };
+    let step = (points.len() / RAYS).max(1);
+    let d: Vec<f64> = points
+        .par_iter()
+        .step_by(step)
+        .map(|p| kd.knn(p, 2).last().map_or(0.0, |x| x.1))
+        .collect();
+    if d.is_empty() {
+        0.0
+    } else {
+        d.iter().sum::<f64>() / d.len() as f64
+    }
+}
+
+/// [`escape_share`] with the points' spacing given (cells at least `2 spacing` wide).
+pub fn escape_share_with_spacing(
+    points: &[Point3<f64>],
+    normals: &[Vector3<f64>],
+    spacing: f64,
+) -> Enclosure {
     let none = Enclosure {
         rays: 0,
         escaped: 0,
@@ -97,7 +127,7 @@ pub fn escape_share(points: &[Point3<f64>], normals: &[Vector3<f64>]) -> Enclosu
     if !(longest > 0.0 && longest.is_finite()) {
         return none;
     }
-    let cell = longest / CELLS as f64;
+    let cell = (longest / CELLS as f64).max(2.0 * spacing);
     // Two cells of margin: rays leave through empty cells.
     let min = b.min - Vector3::repeat(2.0 * cell);
     let dims = [ext.x, ext.y, ext.z].map(|e| (e / cell).ceil() as usize + 5);
