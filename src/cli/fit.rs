@@ -74,8 +74,8 @@ pub struct Args {
     /// What to do where the data stop (a part scanned on a table has no underside): `open`
     /// fits only the scanned surface (an open shell); `smooth` closes every opening with the
     /// implicit's smooth extension (a solid); `auto` closes when the data enclose a volume (at
-    /// most 5 % of the closed surface without points near it) and fits open otherwise. The
-    /// report's `close` says what was chosen and why.
+    /// most 4 % of the rays cast inward from the points leave the part) and fits open
+    /// otherwise. The report's `close` says what was chosen and why.
     #[arg(long, default_value = "auto", value_name = "auto|smooth|open")]
     pub close: String,
     /// Header time stamp (ISO 8601, e.g. 2026-11-22T10:00:00). Default: SOURCE_DATE_EPOCH if

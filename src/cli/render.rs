@@ -132,17 +132,8 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     if a.deviation.is_some() {
         opts.legend_title = "point deviation".into();
     }
-    let layers = [
-        render::LineLayer {
-            lines: &lines,
-            color: opts.line_color,
-            width: opts.line_width,
-        },
-        render::LineLayer {
-            lines: &open,
-            color: render::patches::OPEN_EDGE_COLOUR,
-            width: 2.5 * opts.line_width,
-        },
+    let mut layers = render::patches::outline_layers(&lines, &open, &opts).to_vec();
+    layers.extend([
         render::LineLayer {
             lines: &creases,
             color: crate::features::export::CREASE_COLOUR,
@@ -153,7 +144,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
             color: crate::features::export::CORNER_COLOUR,
             width: 6.0 * opts.line_width,
         },
-    ];
+    ]);
     let img = match scalars {
         Some((d, scale)) => render::render_mesh_layers(&mesh, Some((&d, scale)), &layers, &opts)?,
         None => render::render_mesh_layers(&mesh, None, &layers, &opts)?,

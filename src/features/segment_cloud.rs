@@ -309,13 +309,7 @@ pub fn segment_cloud(
             .par_iter()
             .filter_map(|&i| {
                 let idx: Vec<usize> = wide(i).iter().map(|&x| x as usize).collect();
-                let mut cands: Vec<u32> = idx
-                    .iter()
-                    .map(|&j| label[j])
-                    .filter(|&l| l != NONE)
-                    .collect();
-                cands.sort_unstable();
-                cands.dedup();
+                let cands = labels_among(&idx, &label);
                 let mut best: Option<(f64, u32)> = None;
                 for l in cands {
                     let Some(q) = region_fit(points[i], &idx, &label, l, points, &m, FIT) else {
@@ -360,13 +354,7 @@ pub fn segment_cloud(
                     .map(|x| x.0)
                     .filter(|&j| j != i)
                     .collect();
-                let mut cands: Vec<u32> = idx
-                    .iter()
-                    .map(|&j| label[j])
-                    .filter(|&l| l != NONE)
-                    .collect();
-                cands.sort_unstable();
-                cands.dedup();
+                let cands = labels_among(&idx, &label);
                 let dist = |l: u32| {
                     region_fit_trimmed(points[i], &idx, &label, l, points, &m, REASSIGN, accept)
                         .map(|q| q.distance(&points[i]).abs())
@@ -466,4 +454,16 @@ pub fn segment_cloud(
         smooth_points: smooth.iter().filter(|&&s| s).count(),
         pairs,
     }
+}
+
+/// The distinct region labels (not [`NONE`]) of the points `idx`, sorted.
+fn labels_among(idx: &[usize], label: &[u32]) -> Vec<u32> {
+    let mut cands: Vec<u32> = idx
+        .iter()
+        .map(|&j| label[j])
+        .filter(|&l| l != NONE)
+        .collect();
+    cands.sort_unstable();
+    cands.dedup();
+    cands
 }

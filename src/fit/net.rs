@@ -99,6 +99,7 @@ fn crossing_edges<I: Implicit + ?Sized>(f: &I, net: &QuadNet) -> usize {
 
 /// Builds, projects and smooths the quad net of f = 0 near `seeds` (points on or near the
 /// surface, e.g. the input cloud; at least one per surface component) within `bounds`.
+/// `data` is the tree of `seeds` (the caller's, which measures the support with it too).
 /// With `close` = `Close::Open` each voxel net is cut to the part the seeds support before it
 /// is projected ([`crate::openings`]); otherwise it stays closed.
 /// `score_net` measures a candidate net as patches (`None`: not measured) to rank the grid
@@ -108,6 +109,7 @@ fn crossing_edges<I: Implicit + ?Sized>(f: &I, net: &QuadNet) -> usize {
 pub fn fit_net<I: Implicit + ?Sized, P>(
     f: &I,
     seeds: &[Point3<f64>],
+    data: &KdTree,
     bounds: &Aabb,
     size: PatchSize,
     close: Close,
@@ -119,13 +121,12 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
             "bounding box is empty or not finite".into(),
         ));
     }
-    let data = KdTree::build(seeds)?;
     let open = close == Close::Open;
     let (voxel_net, patch_count) = match size {
         PatchSize::Count(n) if open => {
             // The count is that of the net cut to the data, what the patches will be.
             let kept = |v: &crate::polygonize::voxel_net::VoxelNet| {
-                let (support, _) = net_support(&v.net, &data, v.h);
+                let (support, _) = net_support(&v.net, data, v.h);
                 trim_to_data(&v.net, &support).map_or(0, |(t, _)| t.quads.len())
             };
             let (v, r) = net_for_patch_count_by(f, seeds, bounds, n, &kept)?;
@@ -148,11 +149,11 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
         }
     };
     let h = voxel_net.h;
-    let (first_support, unsupported_share) = net_support(&voxel_net.net, &data, h);
+    let (first_support, unsupported_share) = net_support(&voxel_net.net, data, h);
     let spacing = if open {
         let step = (seeds.len() / 20_000).max(1);
         let sample: Vec<Point3<f64>> = seeds.iter().step_by(step).copied().collect();
-        crate::reconstruct::mean_spacing(&sample, &data)
+        crate::reconstruct::mean_spacing(&sample, data)
     } else {
         0.0
     };
@@ -205,7 +206,7 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
             let support = if k == 0 {
                 first_support.clone()
             } else {
-                net_support(&net, &data, h).0
+                net_support(&net, data, h).0
             };
             match trim_to_data(&net, &support) {
                 Ok((t, r)) => (t, Some(r)),
@@ -234,7 +235,7 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
         // `--close open`: the rim cut again on the projected net and carried to the data's
         // edge ([`crate::openings::rim`]).
         let (net, smoothing, rim) = if open {
-            match fit_rim(&net, f, &data, h, spacing, &SmoothOptions::new(scale, h)) {
+            match fit_rim(&net, f, data, h, spacing, &SmoothOptions::new(scale, h)) {
                 Ok((n, s, r)) => (n, s, Some(r)),
                 Err(e) => {
                     first_error.get_or_insert(e);
@@ -306,20 +307,55 @@ mod tests {
         };
         let b = aabb([-1.3, -1.3, -0.3], [1.3, 1.3, 0.3]);
         let seeds = seeds_on(&t, Point3::origin(), 1.4, 60);
+        let kd = KdTree::build(&seeds).unwrap();
         let none = |_: &QuadNet| None::<(TrialScore, ())>;
-        let (net, r, _) =
-            fit_net(&t, &seeds, &b, PatchSize::Count(600), Close::Smooth, &none).unwrap();
+        let (net, r, _) = fit_net(
+            &t,
+            &seeds,
+            &kd,
+            &b,
+            PatchSize::Count(600),
+            Close::Smooth,
+            &none,
+        )
+        .unwrap();
         assert!((net.quads.len() as f64 - 600.0).abs() <= 90.0);
         assert_eq!(r.euler_characteristic, 0);
         assert_eq!(r.smoothing.smoothed.flipped, 0);
         let json = serde_json::to_string(&r).unwrap();
         assert!(json.contains("\"min_angle_deg\""));
-        let (net2, r2, _) =
-            fit_net(&t, &seeds, &b, PatchSize::Edge(r.h), Close::Smooth, &none).unwrap();
+        let (net2, r2, _) = fit_net(
+            &t,
+            &seeds,
+            &kd,
+            &b,
+            PatchSize::Edge(r.h),
+            Close::Smooth,
+            &none,
+        )
+        .unwrap();
         assert_eq!(net2, net);
         assert!(r2.patch_count.is_none());
-        assert!(fit_net(&t, &seeds, &b, PatchSize::Edge(-1.0), Close::Smooth, &none).is_err());
-        assert!(fit_net(&t, &seeds, &b, PatchSize::Count(0), Close::Smooth, &none).is_err());
+        assert!(fit_net(
+            &t,
+            &seeds,
+            &kd,
+            &b,
+            PatchSize::Edge(-1.0),
+            Close::Smooth,
+            &none
+        )
+        .is_err());
+        assert!(fit_net(
+            &t,
+            &seeds,
+            &kd,
+            &b,
+            PatchSize::Count(0),
+            Close::Smooth,
+            &none
+        )
+        .is_err());
     }
 
     /// The whole net + samples pipeline on the Stanford bunny, with an IMLS implicit standing in
@@ -376,6 +412,7 @@ mod tests {
             let (net, r, _) = fit_net(
                 &f,
                 &mesh.positions,
+                &KdTree::build(&mesh.positions).unwrap(),
                 &b,
                 PatchSize::Count(target),
                 Close::Smooth,

@@ -17,7 +17,7 @@ use crate::normals::{oriented_points, NormalSource};
 use crate::nurbs::{BSplineSurface, Params, PatchGrid, PatchInput, PatchNetwork, Twist};
 use crate::polygonize::QuadNet;
 use crate::quality::{
-    deviation_from_patches, folds, normal_jumps, surface_support, ContinuityReport, FoldReport,
+    deviation_from_patches, folds, normal_jumps, surface_support_at, ContinuityReport, FoldReport,
     PatchDeviation, SampleGrid, SupportReport,
 };
 use crate::spatial::KdTree;
@@ -203,6 +203,9 @@ pub fn fit_measured(
 
     progress("quad net", 0.3);
     let t = Instant::now();
+    // The input points' tree: the net stage cuts an open net to them, the support is
+    // measured against them.
+    let data = KdTree::build(&op.points)?;
     // Each grid placement's net is tried as patches: TRIAL_INTERVALS samples per side, no
     // refinement, its jumps over 5 degrees counted. The kept placement's trial sampling is the
     // first round of the real sampling.
@@ -220,8 +223,15 @@ pub fn fit_measured(
         };
         Some((score, sampling))
     };
-    let (net, net_report, trial_sampling) =
-        fit_net(&f, &op.points, &bounds, opts.size, closure.chosen, &trial)?;
+    let (net, net_report, trial_sampling) = fit_net(
+        &f,
+        &op.points,
+        &data,
+        &bounds,
+        opts.size,
+        closure.chosen,
+        &trial,
+    )?;
     timings.net = t.elapsed().as_secs_f64();
     closure.unsupported_share = net_report.unsupported_share;
     closure.support_radius = crate::openings::SUPPORT_RADIUS * net_report.h;
@@ -239,11 +249,10 @@ pub fn fit_measured(
     }
     let sampling = sample_patches_from(&net, &f, &sample_opts, trial_sampling)?;
     timings.sampling = t.elapsed().as_secs_f64();
-    let data = KdTree::build(&op.points)?;
     let grids: Vec<&Vec<Vec<nalgebra::Point3<f64>>>> =
         sampling.patches.iter().map(|p| &p.points).collect();
-    let support = surface_support(&grids, &data, 0.5 * net_report.h);
-    let support_far = surface_support(&grids, &data, 0.01 * diag);
+    let [support, support_far] =
+        surface_support_at(&grids, &data, [0.5 * net_report.h, 0.01 * diag]);
 
     progress("patches", 0.7);
     let t = Instant::now();

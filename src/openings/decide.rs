@@ -47,24 +47,27 @@ pub struct ClosureReport {
 
 /// Decides `requested` from the ray test; the support fields are filled in by the net stage.
 pub fn choose(requested: Close, enclosure: Enclosure) -> ClosureReport {
-    let pct = 100.0 * enclosure.escape_share;
+    let rays = format!(
+        "{:.1} % of the rays cast inward from the points leave the part",
+        100.0 * enclosure.escape_share
+    );
     let bar = 100.0 * super::OPEN_ESCAPE;
     let (chosen, reason) = match requested {
         Close::Smooth => (
             Close::Smooth,
-            format!("--close smooth: openings closed by the implicit ({pct:.1} % of the rays cast inward from the points leave the part)"),
+            format!("--close smooth: openings closed by the implicit ({rays})"),
         ),
         Close::Open => (
             Close::Open,
-            format!("--close open: only the scanned surface is fitted ({pct:.1} % of the rays cast inward from the points leave the part)"),
+            format!("--close open: only the scanned surface is fitted ({rays})"),
         ),
         Close::Auto if enclosure.escape_share > super::OPEN_ESCAPE => (
             Close::Open,
-            format!("the data do not enclose a volume: {pct:.1} % of the rays cast inward from the points leave the part (more than {bar:.0} %), so only the scanned surface is fitted"),
+            format!("the data do not enclose a volume: {rays} (more than {bar:.0} %), so only the scanned surface is fitted"),
         ),
         Close::Auto => (
             Close::Smooth,
-            format!("the data enclose a volume: {pct:.1} % of the rays cast inward from the points leave the part (at most {bar:.0} %), so openings are closed smoothly"),
+            format!("the data enclose a volume: {rays} (at most {bar:.0} %), so openings are closed smoothly"),
         ),
     };
     ClosureReport {

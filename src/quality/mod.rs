@@ -11,4 +11,4 @@ pub mod support;
 pub use continuity::{normal_jumps, ContinuityReport};
 pub use folds::{folds, FoldReport, SampleGrid};
 pub use patch_deviation::{deviation_from_patches, PatchDeviation};
-pub use support::{surface_support, SupportReport};
+pub use support::{surface_support, surface_support_at, SupportReport};

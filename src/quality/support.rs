@@ -33,11 +33,23 @@ pub fn surface_support(
     data: &KdTree,
     threshold: f64,
 ) -> SupportReport {
+    let [r] = surface_support_at(grids, data, [threshold]);
+    r
+}
+
+/// [`surface_support`] at several thresholds, one nearest-point query per grid cell for all
+/// (`fit` reports two).
+pub fn surface_support_at<const N: usize>(
+    grids: &[&Vec<Vec<Point3<f64>>>],
+    data: &KdTree,
+    thresholds: [f64; N],
+) -> [SupportReport; N] {
     // Per-grid sums collected, then added in grid order: the same bits at any thread count.
-    let per_grid: Vec<(f64, f64)> = grids
+    // Entry 0 is the area, entry 1 + t the area beyond threshold t.
+    let per_grid: Vec<Vec<f64>> = grids
         .par_iter()
         .map(|g| {
-            let mut a = (0.0, 0.0);
+            let mut a = vec![0.0; 1 + N];
             for i in 0..g.len().saturating_sub(1) {
                 for j in 0..g[i]
                     .len()
@@ -50,24 +62,31 @@ pub fn surface_support(
                         continue;
                     }
                     let c = Point3::from((p00.coords + p10.coords + p01.coords + p11.coords) / 4.0);
-                    a.0 += cell;
-                    if data.nearest(&c).1 > threshold {
-                        a.1 += cell;
+                    a[0] += cell;
+                    let d = data.nearest(&c).1;
+                    for (t, &th) in thresholds.iter().enumerate() {
+                        if d > th {
+                            a[1 + t] += cell;
+                        }
                     }
                 }
             }
             a
         })
         .collect();
-    let (area, unsupported) = per_grid
-        .iter()
-        .fold((0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
-    SupportReport {
-        threshold,
+    let sums = per_grid.iter().fold(vec![0.0; 1 + N], |mut x, y| {
+        for (a, b) in x.iter_mut().zip(y) {
+            *a += b;
+        }
+        x
+    });
+    let area = sums[0];
+    std::array::from_fn(|t| SupportReport {
+        threshold: thresholds[t],
         area,
-        unsupported_area: unsupported,
-        unsupported_fraction: if area > 0.0 { unsupported / area } else { 0.0 },
-    }
+        unsupported_area: sums[1 + t],
+        unsupported_fraction: if area > 0.0 { sums[1 + t] / area } else { 0.0 },
+    })
 }
 
 #[cfg(test)]
@@ -97,5 +116,8 @@ mod tests {
         assert!((r.unsupported_fraction - 0.4).abs() < 1e-12, "{r:?}");
         let all = surface_support(&[&grid], &tree, 1.0);
         assert_eq!(all.unsupported_area, 0.0);
+        // Both at once: the same numbers.
+        let both = surface_support_at(&[&grid], &tree, [0.12, 1.0]);
+        assert_eq!(both, [r.clone(), all.clone()]);
     }
 }

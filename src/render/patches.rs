@@ -60,7 +60,7 @@ pub fn open_sides(outlines: &[Vec<Point3<f64>>]) -> Vec<Vec<Point3<f64>>> {
 }
 
 /// The patch boundaries in the options' line colour and the open boundary over them.
-fn outline_layers<'a>(
+pub fn outline_layers<'a>(
     lines: &'a [Vec<Point3<f64>>],
     open: &'a [Vec<Point3<f64>>],
     opts: &RenderOptions,
