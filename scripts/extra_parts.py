@@ -32,6 +32,13 @@ axis-aligned; these parts are different in kind, to judge a fit on shapes it was
   slotplate    a thin plate with a round-ended slot (walls tangent to the end cylinders: no
                crease there), a counterbored hole and a filleted corner. Stresses: tangent
                joins that must not read as creases, a step inside a hole.
+  vblock       a block with a 90-degree V groove along its top, a through hole and one top edge
+               filleted on one side only. Stresses: a concave crease at the groove's root, a
+               fillet that ends where the top meets the end faces sharply.
+  lplate       an L-shaped plate with a chamfered inner corner and a hole in each arm, rotated
+               25 deg about z and 10 about x. Stresses: a concave corner, a narrow chamfer, no
+               axis-aligned face.
+  (vblock and lplate were added after the features' fold merge and measured unseen.)
 Every part is checked to be one valid closed solid (BRepCheck_Analyzer), and every fillet and
 chamfer must select at least one edge (an error otherwise).
 """
@@ -234,10 +241,33 @@ def part_slotplate():
     return fillet(s, 8.0, lambda m: abs(m[0] - 80) < EPS and abs(m[1] - 50) < EPS, "slotplate fillet")
 
 
+def part_vblock():
+    """80 x 40 x 30 block; a 90-degree V groove along x, 10 deep, its root at y = 20, z = 20;
+    a 5 mm fillet on the top edge at y = 40 (before the groove is cut); an 8 mm through hole."""
+    s = box(0, 0, 0, 80, 40, 30)
+    s = fillet(s, 5.0, lambda m: abs(m[1] - 40) < EPS and abs(m[2] - 30) < EPS, "vblock fillet")
+    root = np.array([0, 20, 20.0])
+    groove = box(-1, 0, 0, 81, 40, 31)
+    for n in (np.array([0, -1, 1.0]), np.array([0, 1, 1.0])):
+        groove = cut(groove, halfspace(root, -n / np.linalg.norm(n)))
+    s = cut(s, groove)
+    return cut(s, cylinder(60, 10, -1, 4.0, 32))
+
+
+def part_lplate():
+    """An L-shaped plate (60 x 60, arms 20 wide, 8 thick), a 3 mm chamfer on the inner corner's
+    vertical edge, a 10 mm hole in each arm; rotated 25 deg about z, then 10 about x."""
+    s = prism([(0, 0), (60, 0), (60, 20), (20, 20), (20, 60), (0, 60)], 8)
+    s = chamfer(s, 3.0, lambda m: abs(m[0] - 20) < EPS and abs(m[1] - 20) < EPS, "lplate chamfer")
+    s = cut(s, cylinder(45, 10, -1, 5.0, 10))
+    s = cut(s, cylinder(10, 45, -1, 5.0, 10))
+    return rotated(s, [((0, 0, 1), 25.0), ((1, 0, 0), 10.0)])
+
+
 EXTRA = {name: checked(name, f) for name, f in (
     ("flange", part_flange), ("wedge", part_wedge), ("tilted", part_tilted),
     ("stepped", part_stepped), ("cornerblock", part_cornerblock), ("hexnut", part_hexnut),
-    ("slotplate", part_slotplate))}
+    ("slotplate", part_slotplate), ("vblock", part_vblock), ("lplate", part_lplate))}
 
 
 if __name__ == "__main__":

@@ -26,6 +26,10 @@
 //!    candidates within a few spacings are one corner, and crease ends near a corner are
 //!    joined to it.
 //!
+//! Step 1 is [`boundary_points`], kept apart so that [`super::folds`] can first measure how
+//! much of each pair's common boundary it creases (and merge the pairs that only fold in
+//! places); [`creases_from`] does steps 2-4.
+//!
 //! Every step is a parallel map over points or a sequential walk in index order, so the
 //! result does not depend on the thread count.
 
@@ -75,8 +79,24 @@ impl Default for CreaseOptions {
     }
 }
 
-/// What one boundary point gives: a crease sample of a region pair, a corner candidate.
-type Found = (Option<((u32, u32), Sample)>, Option<Point3<f64>>);
+/// What one point gives when it lies on the boundary between two regions that meet at a
+/// crease (step 1); every field is `None` for the other points.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct BoundaryPoint {
+    /// The region pair (smaller id first) whose common boundary the point lies on.
+    pub pair: Option<(u32, u32)>,
+    /// The crease sample found there (the pair's side planes meet near the point).
+    sample: Option<Sample>,
+    /// A corner candidate (three sides' planes meet near the point).
+    corner: Option<Point3<f64>>,
+}
+
+impl BoundaryPoint {
+    /// True when the two sides meet at a crease at this point (a crease sample was found).
+    pub fn creased(&self) -> bool {
+        self.sample.is_some()
+    }
+}
 
 /// Running sums of a thinning cell: positions, directions, angles, count.
 type CellSum = (Vector3<f64>, Vector3<f64>, f64, f64);
@@ -152,6 +172,19 @@ pub fn cloud_creases(
     spacing: f64,
     opts: &CreaseOptions,
 ) -> (Vec<Crease>, Vec<Point3<f64>>) {
+    let found = boundary_points(points, labels, kd, spacing, opts);
+    creases_from(&found, spacing, opts)
+}
+
+/// Step 1 of the module doc: per point (in order), the region pair whose boundary it lies on,
+/// and the crease sample and corner candidate found there.
+pub fn boundary_points(
+    points: &[Point3<f64>],
+    labels: &CloudLabels,
+    kd: &KdTree,
+    spacing: f64,
+    opts: &CreaseOptions,
+) -> Vec<BoundaryPoint> {
     let pairs: BTreeSet<(u32, u32)> = labels
         .pairs
         .iter()
@@ -162,13 +195,12 @@ pub fn cloud_creases(
     // Plane fits keep the points within a few noise deviations (or a tenth of a spacing, for
     // exact data) of their first fit.
     let trim = (3.0 * labels.sigma).max(0.1 * spacing);
-    // 1. Samples, and corner candidates, per boundary point.
-    let found: Vec<Found> = (0..points.len())
+    (0..points.len())
         .into_par_iter()
         .map(|i| {
             let a = labels.label[i];
             if a == NONE {
-                return (None, None);
+                return BoundaryPoint::default();
             }
             let near = kd.knn(&points[i], opts.link);
             let other = near
@@ -177,8 +209,9 @@ pub fn cloud_creases(
                 .filter(|&b| b != a && b != NONE && pairs.contains(&(a.min(b), a.max(b))))
                 .min();
             let Some(b) = other else {
-                return (None, None);
+                return BoundaryPoint::default();
             };
+            let pair = Some((a.min(b), a.max(b)));
             let idx: Vec<usize> = kd
                 .knn(&points[i], opts.gather)
                 .into_iter()
@@ -188,7 +221,10 @@ pub fn cloud_creases(
             // (a rounded rim, a thin fold): no crease sample there.
             let loose = idx.iter().filter(|&&j| labels.label[j] == NONE).count();
             if loose as f64 > opts.max_loose * idx.len() as f64 {
-                return (None, None);
+                return BoundaryPoint {
+                    pair,
+                    ..BoundaryPoint::default()
+                };
             }
             let sides = side_planes(&idx, points, labels, trim);
             let side = |l: u32| sides.iter().find(|s| s.region == l);
@@ -208,7 +244,7 @@ pub fn cloud_creases(
                         .filter(|x| near_side(x, a) && near_side(x, b))
                         .map(|x| {
                             let angle = pa.1.dot(&pb.1).clamp(-1.0, 1.0).acos().to_degrees();
-                            ((a.min(b), a.max(b)), Sample { p: x, d, angle })
+                            Sample { p: x, d, angle }
                         })
                 }
                 _ => None,
@@ -219,14 +255,27 @@ pub fn cloud_creases(
             } else {
                 None
             };
-            (sample, corner)
+            BoundaryPoint {
+                pair,
+                sample,
+                corner,
+            }
         })
-        .collect();
+        .collect()
+}
+
+/// Steps 2-4 of the module doc: the creases and corners from the boundary points.
+pub fn creases_from(
+    found: &[BoundaryPoint],
+    spacing: f64,
+    opts: &CreaseOptions,
+) -> (Vec<Crease>, Vec<Point3<f64>>) {
+    let reach = opts.reach * spacing;
     // 2. Thinning per pair and cell.
     let cell = opts.cell * spacing;
     // Per (pair, cell): sums of positions, directions, angles, and the count.
     let mut cells: BTreeMap<((u32, u32), [i64; 3]), CellSum> = BTreeMap::new();
-    for (pair, s) in found.iter().filter_map(|f| f.0) {
+    for (pair, s) in found.iter().filter_map(|f| Some((f.pair?, f.sample?))) {
         let key = s.p.coords.map(|x| (x / cell).floor() as i64);
         let e = cells.entry((pair, [key.x, key.y, key.z])).or_insert((
             Vector3::zeros(),
@@ -277,7 +326,7 @@ pub fn cloud_creases(
     // candidates (fitted from the few points of each face right at the corner, so less
     // exact) fill in where a crease faded out before it.
     let mut corners = corners_from_ends(&creases, opts.step * cell);
-    let candidates: Vec<Point3<f64>> = found.iter().filter_map(|f| f.1).collect();
+    let candidates: Vec<Point3<f64>> = found.iter().filter_map(|f| f.corner).collect();
     for c in cluster(&candidates, 2.0 * reach) {
         if corners.iter().all(|e| (e - c).norm() > 2.0 * reach) {
             corners.push(c);

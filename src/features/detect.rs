@@ -2,17 +2,18 @@
 //! regions (every point labelled), the crease polylines between them and the corners where
 //! three or more meet. A mesh goes through [`super::segment_mesh`] and
 //! [`super::crease_mesh`] (its creases are mesh edges), a cloud through
-//! [`super::segment_cloud`] and [`super::crease_cloud`] (its creases are where the two sides'
-//! planes meet).
+//! [`super::segment_cloud`], [`super::folds`] and [`super::crease_cloud`] (its creases are
+//! where the two sides' planes meet).
 //!
 //! Thresholds come from the data: the cloud's tests are in multiples of its noise (the median
 //! residual of local quadratic fits, [`crate::implicit::noise`]'s measure) and its point
 //! spacing; the mesh's are its mean edge length. One angle is fixed: regions meeting at less
 //! than [`DetectOptions::angle_deg`] (20 degrees) are one smooth region (`--angle` overrides).
 
-use super::crease_cloud::{cloud_creases, CreaseOptions};
+use super::crease_cloud::{boundary_points, creases_from, CreaseOptions};
 use super::crease_mesh::mesh_creases;
 use super::details::absorb_details;
+use super::folds::merge_folds;
 use super::lines::Crease;
 use super::segment_cloud::{segment_cloud, CloudOptions, NONE};
 use super::segment_mesh::{segment_mesh, MeshOptions};
@@ -199,9 +200,14 @@ fn detect_cloud(op: &OrientedPoints, opts: &DetectOptions) -> Result<Found> {
     };
     // No detail absorption here: a cloud's pair angles come from local fits (a chamfer's
     // 45 degrees reads 40-44), too close to an organic detail's to tell them apart.
-    let labels = segment_cloud(points, normals, &kd, &cloud);
+    let mut labels = segment_cloud(points, normals, &kd, &cloud);
     let spacing = crate::reconstruct::mean_spacing(points, &kd);
-    let (creases, corners) = cloud_creases(points, &labels, &kd, spacing, &opts.creases);
+    let mut found = boundary_points(points, &labels, &kd, spacing, &opts.creases);
+    // Pairs that only fold in places are one surface; their samples go with them.
+    if merge_folds(points, &mut labels, &found, spacing, &opts.creases) > 0 {
+        found = boundary_points(points, &labels, &kd, spacing, &opts.creases);
+    }
+    let (creases, corners) = creases_from(&found, spacing, &opts.creases);
     Ok(Found {
         method: "cloud",
         noise: labels.sigma,

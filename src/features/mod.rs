@@ -9,6 +9,8 @@
 //! - [`segment_cloud`]: regions of a noisy point cloud (local quadric residuals and normal
 //!   bend, region growing, the crease band assigned by distance to each side's surface);
 //! - [`merge`]: regions that meet smoothly become one;
+//! - [`folds`]: regions of a cloud creased along only part of their common boundary (a rim,
+//!   a groove of an organic scan) become one;
 //! - [`details`]: small regions of a mesh behind mild creases (organic detail) join a
 //!   neighbour;
 //! - [`crease_mesh`], [`crease_cloud`]: crease polylines and corners of each kind of input;
@@ -27,6 +29,7 @@ pub mod crease_mesh;
 pub mod details;
 pub mod detect;
 pub mod export;
+pub mod folds;
 pub mod lines;
 pub mod local_fit;
 pub mod merge;
@@ -235,7 +238,11 @@ pub fn segment(input: &Mesh, op: &OrientedPoints, opts: &FeatureOptions) -> Resu
 
 fn segment_points(op: &OrientedPoints, opts: &CloudOptions) -> Result<Segmentation> {
     let kd = KdTree::build(&op.points)?;
-    let l = segment_cloud(&op.points, &op.normals, &kd, opts);
+    let mut l = segment_cloud(&op.points, &op.normals, &kd, opts);
+    let spacing = crate::reconstruct::mean_spacing(&op.points, &kd);
+    let creases = crease_cloud::CreaseOptions::default();
+    let found = crease_cloud::boundary_points(&op.points, &l, &kd, spacing, &creases);
+    folds::merge_folds(&op.points, &mut l, &found, spacing, &creases);
     let mut regions = vec![Region::default(); l.regions];
     let mut label_points = Vec::with_capacity(op.points.len());
     let mut label_of = Vec::with_capacity(op.points.len());

@@ -18,19 +18,7 @@ fn repo() -> PathBuf {
 }
 
 fn bunny() -> Option<PathBuf> {
-    // `$SCANSURF_SHARED_DATA` when set (as in tests/it/support), else `../shared/data`.
-    let data = std::env::var_os("SCANSURF_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo().join("../shared/data"));
-    let p = data.join("stanford-bunny.obj");
-    if p.exists() {
-        Some(p)
-    } else if std::env::var_os("CI").is_some() {
-        panic!("CI: ../shared/data/stanford-bunny.obj is missing");
-    } else {
-        eprintln!("SKIPPED: no ../shared/data");
-        None
-    }
+    common::shared_model("stanford-bunny.obj")
 }
 
 /// The bunny fit (default options, STEP and IGES), computed once and shared by the tests that

@@ -162,6 +162,23 @@ pub fn shared_tools() -> Option<PathBuf> {
     dir.join("make_parts.py").exists().then_some(dir)
 }
 
+/// A model of the shared test data (`$SCANSURF_SHARED_DATA` when set, as in tests/it/support,
+/// else `../shared/data`): `None` (the test skips) when it is missing, a failure under CI.
+pub fn shared_model(name: &str) -> Option<PathBuf> {
+    let data = std::env::var_os("SCANSURF_SHARED_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    let p = data.join(name);
+    if p.exists() {
+        Some(p)
+    } else if std::env::var_os("CI").is_some() {
+        panic!("CI: ../shared/data/{name} is missing");
+    } else {
+        eprintln!("SKIPPED: no ../shared/data/{name}");
+        None
+    }
+}
+
 /// make_parts' block and bracket (200,000 points, noise 0.01 mm; each as NAME.step, the exact
 /// truth, NAME.stl, NAME.xyz and NAME-occluded.xyz, seen from above), made once per test run;
 /// `None` outside CI when the tools or the checker's venv are missing.
