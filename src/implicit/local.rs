@@ -10,6 +10,7 @@
 
 use super::poly::{Degree, Frame, HeightPoly};
 use super::rbf::ThinPlateRbf;
+use super::sharp::SharpFunction;
 use nalgebra::{Point3, Vector3};
 
 /// Which kind of function a domain uses.
@@ -23,6 +24,8 @@ pub enum LocalKind {
     Cubic,
     /// Seed 003 eq. 1-6 / seed 004 eq. 3.
     Rbf,
+    /// One height polynomial per smooth region, combined by max / min ([`super::sharp`]).
+    Sharp,
     /// An empty domain far from all points: a constant signed distance estimate.
     Constant,
 }
@@ -32,6 +35,7 @@ pub enum LocalKind {
 pub enum LocalFunction {
     Poly(HeightPoly),
     Rbf(ThinPlateRbf),
+    Sharp(SharpFunction),
     Constant(f64),
 }
 
@@ -45,6 +49,7 @@ impl LocalFunction {
                 Degree::Cubic => LocalKind::Cubic,
             },
             LocalFunction::Rbf(_) => LocalKind::Rbf,
+            LocalFunction::Sharp(_) => LocalKind::Sharp,
             LocalFunction::Constant(_) => LocalKind::Constant,
         }
     }
@@ -54,6 +59,7 @@ impl LocalFunction {
         match self {
             LocalFunction::Poly(p) => p.value(x),
             LocalFunction::Rbf(r) => r.value(x),
+            LocalFunction::Sharp(s) => s.value(x),
             LocalFunction::Constant(c) => *c,
         }
     }
@@ -63,7 +69,20 @@ impl LocalFunction {
         match self {
             LocalFunction::Poly(p) => p.value_and_gradient(x),
             LocalFunction::Rbf(r) => r.value_and_gradient(x),
+            LocalFunction::Sharp(s) => s.value_and_gradient(x),
             LocalFunction::Constant(c) => (*c, Vector3::zeros()),
+        }
+    }
+
+    /// f(x) and grad f(x) on the side of `region` where this is a sharp function with such a
+    /// side ([`SharpFunction::side_value_and_gradient`]), else as [`Self::value_and_gradient`].
+    #[inline]
+    pub fn side_value_and_gradient(&self, region: u32, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+        match self {
+            LocalFunction::Sharp(s) => s
+                .side_value_and_gradient(region, x)
+                .unwrap_or_else(|| s.value_and_gradient(x)),
+            _ => self.value_and_gradient(x),
         }
     }
 }

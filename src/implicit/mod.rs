@@ -34,6 +34,7 @@ pub mod poly;
 pub mod pou;
 pub mod project;
 pub mod rbf;
+pub mod sharp;
 pub mod tps_kernel;
 
 pub use pou::{FitOptions, FitStats, PouImplicit};

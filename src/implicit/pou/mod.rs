@@ -153,6 +153,9 @@ pub struct FitStats {
     pub quadratic: usize,
     pub cubic: usize,
     pub rbf: usize,
+    /// Cells crossed by a crease: one polynomial per region, combined by max / min
+    /// ([`super::sharp`]; only with regions given, [`PouImplicit::fit_with_regions`]).
+    pub sharp: usize,
     pub constant: usize,
     /// Cells without points in their support (holes, empty space), counted in the kinds above.
     pub extrapolating: usize,
@@ -419,6 +422,7 @@ impl PouImplicit {
                 LocalKind::Quadratic => stats.quadratic += 1,
                 LocalKind::Cubic => stats.cubic += 1,
                 LocalKind::Rbf => stats.rbf += 1,
+                LocalKind::Sharp => stats.sharp += 1,
                 LocalKind::Constant => stats.constant += 1,
             }
             if cell.role != CellRole::Fitted {

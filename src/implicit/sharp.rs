@@ -1,0 +1,438 @@
+//! Sharp local functions: a domain crossed by a crease (or holding a corner) fits one height
+//! polynomial per smooth region ([`crate::features`]) and combines them by max and min
+//! (Ohtake, Belyaev, Alexa, Turk, Seidel 2003, "Multi-level partition of unity implicits",
+//! section 4, "sharp features"), instead of one smooth function that rounds the edge.
+//!
+//! Each side i has its own height polynomial f_i (seed 004 eq. 1, or a plane on few points),
+//! negative inside. The solid near a **convex** edge is the intersection of the two sides'
+//! half-spaces, near a **concave** edge their union:
+//!
+//! ```text
+//! convex:   F = max(f_a, f_b)        concave:  F = min(f_a, f_b)
+//! corner:   F = max(f_a, f_b, f_c), min(f_a, f_b, f_c), or mixed:
+//!           F = max(f_a, min(f_b, f_c))   (a meets b and c convexly, b and c meet concavely)
+//!           F = min(f_a, max(f_b, f_c))   (the opposite)
+//! ```
+//!
+//! Which one is decided from the data: two sides meet convexly when each side's points lie
+//! inside the other's half-space (median of f_b over a's points plus median of f_a over b's
+//! points below zero), concavely otherwise. Of the three relations at a corner either all agree
+//! (max or min of all three) or exactly one pair (b, c) differs, and then side a meets both
+//! others the same way: F = outer(f_a, inner(f_b, f_c)).
+//!
+//! grad F is the gradient of the side that gives the max or min (of the first such side on a
+//! tie), so F is only C0 on the crease, where the active side changes: the blend of seed 003
+//! eq. 8 carries that into the implicit, which is then C0 along the creases and C2 elsewhere.
+//! [`SharpFunction::side_value_and_gradient`] evaluates one side alone (the crease's two
+//! surfaces for the net and patch stages, Newton on f_a = f_b = 0).
+
+use super::poly::{Degree, Frame, HeightPoly};
+use nalgebra::{Point3, Vector3};
+
+/// Fewest points of one region in a domain for a side of its own.
+pub const MIN_SIDE: usize = 8;
+
+/// Fewest points for a quadratic side (a plane below).
+const QUADRATIC_FROM: usize = 16;
+
+/// Most sides of one sharp function (an edge: 2, a corner: 3; more are split further).
+pub const MAX_SIDES: usize = 3;
+
+/// Label of a point that belongs to no region (it joins no side).
+pub const NO_REGION: u32 = u32::MAX;
+
+/// How two values are combined.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Combine {
+    /// Intersection of the insides (a convex edge).
+    Max,
+    /// Union of the insides (a concave edge).
+    Min,
+}
+
+impl Combine {
+    /// The combined value and which of the two (0 or 1) gave it (the first on a tie).
+    #[inline]
+    fn pick(self, a: f64, b: f64) -> (f64, usize) {
+        let first = match self {
+            Combine::Max => a >= b,
+            Combine::Min => a <= b,
+        };
+        if first {
+            (a, 0)
+        } else {
+            (b, 1)
+        }
+    }
+}
+
+/// One side of a sharp function: a region and its height polynomial.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SharpSide {
+    pub region: u32,
+    pub poly: HeightPoly,
+}
+
+/// F = outer(f_0, inner(f_1, f_2)) over two or three sides (module doc).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SharpFunction {
+    sides: Vec<SharpSide>,
+    outer: Combine,
+    /// With three sides: how sides 1 and 2 combine (equal to `outer` when all three meet the
+    /// same way). Unused with two.
+    inner: Combine,
+}
+
+impl SharpFunction {
+    /// A sharp function from its sides (two or three) and how they combine; `None` for another
+    /// number of sides.
+    pub fn new(sides: Vec<SharpSide>, outer: Combine, inner: Combine) -> Option<SharpFunction> {
+        (2..=MAX_SIDES)
+            .contains(&sides.len())
+            .then_some(SharpFunction {
+                sides,
+                outer,
+                inner,
+            })
+    }
+
+    /// The sides.
+    pub fn sides(&self) -> &[SharpSide] {
+        &self.sides
+    }
+
+    /// How side 0 combines with the rest, and (three sides) sides 1 and 2 with each other.
+    pub fn combination(&self) -> (Combine, Combine) {
+        (self.outer, self.inner)
+    }
+
+    /// The side that gives F at `x`.
+    pub fn active(&self, x: &Point3<f64>) -> usize {
+        let v: Vec<f64> = self.sides.iter().map(|s| s.poly.value(x)).collect();
+        self.pick(&v).1
+    }
+
+    /// F and which side gives it, from the sides' values.
+    #[inline]
+    fn pick(&self, v: &[f64]) -> (f64, usize) {
+        if v.len() == 2 {
+            return self.outer.pick(v[0], v[1]);
+        }
+        let (r, k) = self.inner.pick(v[1], v[2]);
+        let (f, j) = self.outer.pick(v[0], r);
+        (f, if j == 0 { 0 } else { 1 + k })
+    }
+
+    /// F(x).
+    #[inline]
+    pub fn value(&self, x: &Point3<f64>) -> f64 {
+        let mut v = [0.0; MAX_SIDES];
+        for (vi, s) in v.iter_mut().zip(&self.sides) {
+            *vi = s.poly.value(x);
+        }
+        self.pick(&v[..self.sides.len()]).0
+    }
+
+    /// F(x) and the gradient of the active side.
+    #[inline]
+    pub fn value_and_gradient(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+        let mut v = [0.0; MAX_SIDES];
+        for (vi, s) in v.iter_mut().zip(&self.sides) {
+            *vi = s.poly.value(x);
+        }
+        let (_, k) = self.pick(&v[..self.sides.len()]);
+        self.sides[k].poly.value_and_gradient(x)
+    }
+
+    /// f and grad f of the side of `region` alone, `None` when it is not a side here.
+    pub fn side_value_and_gradient(
+        &self,
+        region: u32,
+        x: &Point3<f64>,
+    ) -> Option<(f64, Vector3<f64>)> {
+        self.sides
+            .iter()
+            .find(|s| s.region == region)
+            .map(|s| s.poly.value_and_gradient(x))
+    }
+
+    /// Fits a sharp function to a domain's points: `labels[i]` is the region of `points[i]`
+    /// ([`NO_REGION`] for none), `normals` their one-sided unit normals, `scale` the domain's
+    /// length scale, `min_normal_cos` the height-function test of [`Frame::from_normals`].
+    /// `None` unless two or three regions hold at least [`MIN_SIDE`] points each and every side
+    /// can be fitted (not yet assessed against the tolerance: the caller does that, over all
+    /// the points).
+    pub fn fit(
+        points: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        labels: &[u32],
+        scale: f64,
+        min_normal_cos: f64,
+    ) -> Option<SharpFunction> {
+        let groups = region_groups(labels, MIN_SIDE);
+        if !(2..=MAX_SIDES).contains(&groups.len()) {
+            return None;
+        }
+        let mut sides = Vec::with_capacity(groups.len());
+        let mut members = Vec::with_capacity(groups.len());
+        for (region, idx) in groups {
+            let p: Vec<Point3<f64>> = idx.iter().map(|&i| points[i]).collect();
+            let n: Vec<Vector3<f64>> = idx.iter().map(|&i| normals[i]).collect();
+            let poly = fit_side(&p, &n, scale, min_normal_cos)?;
+            sides.push(SharpSide { region, poly });
+            members.push(p);
+        }
+        // Relation of each pair: convex when each side's points lie inside the other.
+        let convex = |i: usize, j: usize| -> bool {
+            let inside =
+                |a: usize, b: usize| median(members[a].iter().map(|p| sides[b].poly.value(p)));
+            inside(i, j) + inside(j, i) < 0.0
+        };
+        let kind = |c: bool| if c { Combine::Max } else { Combine::Min };
+        if sides.len() == 2 {
+            let c = kind(convex(0, 1));
+            return SharpFunction::new(sides, c, c);
+        }
+        let (r01, r02, r12) = (convex(0, 1), convex(0, 2), convex(1, 2));
+        // The side whose two relations agree goes first (module doc).
+        let first = if r01 == r02 {
+            0
+        } else if r01 == r12 {
+            1
+        } else {
+            2
+        };
+        let (outer, inner) = match first {
+            0 => (kind(r01), kind(r12)),
+            1 => (kind(r01), kind(r02)),
+            _ => (kind(r02), kind(r01)),
+        };
+        sides.swap(0, first);
+        SharpFunction::new(sides, outer, inner)
+    }
+}
+
+/// Regions with at least `min` of `labels`, with the indices of their points, largest first
+/// (ties by region id).
+pub fn region_groups(labels: &[u32], min: usize) -> Vec<(u32, Vec<usize>)> {
+    let mut by: std::collections::BTreeMap<u32, Vec<usize>> = std::collections::BTreeMap::new();
+    for (i, &l) in labels.iter().enumerate() {
+        if l != NO_REGION {
+            by.entry(l).or_default().push(i);
+        }
+    }
+    let mut out: Vec<(u32, Vec<usize>)> = by.into_iter().filter(|(_, v)| v.len() >= min).collect();
+    out.sort_by(|a, b| b.1.len().cmp(&a.1.len()).then(a.0.cmp(&b.0)));
+    out
+}
+
+/// One side's height polynomial: fitted, then fitted again without the points farther than
+/// three times the median residual (a few points of the other face given to this region beside
+/// the crease tilt it otherwise).
+fn fit_side(
+    p: &[Point3<f64>],
+    n: &[Vector3<f64>],
+    scale: f64,
+    min_normal_cos: f64,
+) -> Option<HeightPoly> {
+    let frame = Frame::from_normals(p, n, scale, min_normal_cos)?;
+    let degree = |k: usize| {
+        if k >= QUADRATIC_FROM {
+            Degree::Quadratic
+        } else {
+            Degree::Linear
+        }
+    };
+    let first = HeightPoly::fit(p, frame, degree(p.len())).ok()?;
+    let r: Vec<f64> = p.iter().map(|x| first.value(x).abs()).collect();
+    let cut = 3.0 * median(r.iter().copied());
+    let kept: Vec<Point3<f64>> = p
+        .iter()
+        .zip(&r)
+        .filter(|(_, &ri)| ri <= cut)
+        .map(|(x, _)| *x)
+        .collect();
+    if kept.len() == p.len() || kept.len() < MIN_SIDE {
+        return Some(first);
+    }
+    HeightPoly::fit(&kept, frame, degree(kept.len()))
+        .ok()
+        .or(Some(first))
+}
+
+/// Median of the values (0 for none).
+fn median(values: impl Iterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = values.collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    let m = v.len() / 2;
+    *v.select_nth_unstable_by(m, f64::total_cmp).1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points on the faces of the solid { x <= 0 } ∩ { y <= 0 } (convex edge along z) or its
+    /// complement's boundary (concave), within `r` of the edge, with normals and labels.
+    fn edge(convex: bool, r: f64, k: usize) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>, Vec<u32>) {
+        let (mut p, mut n, mut l) = (Vec::new(), Vec::new(), Vec::new());
+        let s = if convex { 1.0 } else { -1.0 };
+        for i in 1..=k {
+            for j in 0..k {
+                let a = r * i as f64 / k as f64;
+                let z = r * (2.0 * j as f64 / k as f64 - 1.0);
+                // Face x = 0 (region 0) over y < 0, face y = 0 (region 1) over x < 0.
+                p.push(Point3::new(0.0, -a, z));
+                n.push(Vector3::x() * s);
+                l.push(0);
+                p.push(Point3::new(-a, 0.0, z));
+                n.push(Vector3::y() * s);
+                l.push(1);
+            }
+        }
+        (p, n, l)
+    }
+
+    #[test]
+    fn convex_edge_is_the_max_of_its_faces() {
+        let (p, n, l) = edge(true, 1.0, 8);
+        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3).unwrap();
+        assert_eq!(f.combination().0, Combine::Max);
+        // Zero on both faces, up to the edge.
+        for q in &p {
+            assert!(f.value(q).abs() < 1e-9, "{q}: {}", f.value(q));
+        }
+        // Inside (x, y < 0) negative, outside positive, the distance to the solid beyond the
+        // edge's corner region.
+        assert!((f.value(&Point3::new(-0.2, -0.3, 0.1)) + 0.2).abs() < 1e-9);
+        assert!((f.value(&Point3::new(0.3, 0.1, 0.0)) - 0.3).abs() < 1e-9);
+        // The gradient is one face's normal, whichever is nearer.
+        let (_, g) = f.value_and_gradient(&Point3::new(0.1, -0.5, 0.0));
+        assert!((g - Vector3::x()).norm() < 1e-9, "{g}");
+        let (_, g) = f.value_and_gradient(&Point3::new(-0.5, 0.1, 0.0));
+        assert!((g - Vector3::y()).norm() < 1e-9, "{g}");
+        // Each side alone.
+        let (v, g) = f
+            .side_value_and_gradient(1, &Point3::new(0.3, 0.2, 0.0))
+            .unwrap();
+        assert!((v - 0.2).abs() < 1e-9 && (g - Vector3::y()).norm() < 1e-9);
+        assert!(f.side_value_and_gradient(7, &Point3::origin()).is_none());
+    }
+
+    #[test]
+    fn concave_edge_is_the_min_of_its_faces() {
+        // The solid is the complement: x >= 0 or y >= 0, normals pointing into x, y < 0.
+        let (p, n, l) = edge(false, 1.0, 8);
+        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3).unwrap();
+        assert_eq!(f.combination().0, Combine::Min);
+        for q in &p {
+            assert!(f.value(q).abs() < 1e-9);
+        }
+        // Outside is the quadrant x, y < 0: positive there, by the distance to the nearer face.
+        assert!((f.value(&Point3::new(-0.2, -0.5, 0.0)) - 0.2).abs() < 1e-9);
+        // Inside (x > 0 or y > 0): negative.
+        assert!(f.value(&Point3::new(0.3, -0.5, 0.0)) < 0.0);
+        assert!(f.value(&Point3::new(-0.5, 0.3, 0.0)) < 0.0);
+        let (_, g) = f.value_and_gradient(&Point3::new(-0.1, -0.5, 0.0));
+        assert!((g + Vector3::x()).norm() < 1e-9, "{g}");
+    }
+
+    /// Points of the faces x = 0 (region 0), y = 0 (1), z = 0 (2) around the corner at the
+    /// origin of the cube [-1, 0]^3 (all convex), with outward normals.
+    fn corner(k: usize) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>, Vec<u32>) {
+        let (mut p, mut n, mut l) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 1..=k {
+            for j in 1..=k {
+                let (a, b) = (-(i as f64) / k as f64, -(j as f64) / k as f64);
+                for (r, q) in [
+                    Point3::new(0.0, a, b),
+                    Point3::new(a, 0.0, b),
+                    Point3::new(a, b, 0.0),
+                ]
+                .into_iter()
+                .enumerate()
+                {
+                    p.push(q);
+                    n.push(Vector3::ith(r, 1.0));
+                    l.push(r as u32);
+                }
+            }
+        }
+        (p, n, l)
+    }
+
+    #[test]
+    fn convex_corner_is_the_max_of_three_faces() {
+        let (p, n, l) = corner(6);
+        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3).unwrap();
+        assert_eq!(f.combination(), (Combine::Max, Combine::Max));
+        assert!(f.value(&Point3::origin()).abs() < 1e-9);
+        assert!((f.value(&Point3::new(-0.1, -0.2, -0.3)) + 0.1).abs() < 1e-9);
+        assert!((f.value(&Point3::new(0.2, 0.1, -0.5)) - 0.2).abs() < 1e-9);
+        let (_, g) = f.value_and_gradient(&Point3::new(-0.5, -0.5, 0.1));
+        assert!((g - Vector3::z()).norm() < 1e-9);
+    }
+
+    #[test]
+    fn mixed_corner_nests_the_odd_pair() {
+        // An L-shaped step: the solid { z <= 0 } ∩ ({ x <= 0 } ∪ { y <= 0 }) near the origin:
+        // the top z = 0 (region 2) meets both walls convexly, the walls x = 0 (0) and y = 0
+        // (1) meet each other concavely (the inner corner of the L).
+        let (mut p, mut n, mut l) = (Vec::new(), Vec::new(), Vec::new());
+        let k = 8;
+        for i in 0..k {
+            for j in 1..=k {
+                let (a, b) = (i as f64 / k as f64, -(j as f64) / k as f64);
+                // Wall x = 0 over y > 0 (outside: +x), wall y = 0 over x > 0 (outside: +y).
+                p.push(Point3::new(0.0, a + 0.05, b));
+                n.push(Vector3::x());
+                l.push(0);
+                p.push(Point3::new(a + 0.05, 0.0, b));
+                n.push(Vector3::y());
+                l.push(1);
+            }
+        }
+        for i in 1..=k {
+            for j in 1..=k {
+                // The top over the L: x < 0 or y < 0.
+                let (a, b) = (-(i as f64) / k as f64, j as f64 / k as f64);
+                for q in [Point3::new(a, b - 0.5, 0.0), Point3::new(b - 0.5, a, 0.0)] {
+                    p.push(q);
+                    n.push(Vector3::z());
+                    l.push(2);
+                }
+            }
+        }
+        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3).unwrap();
+        assert_eq!(f.sides()[0].region, 2, "the top goes first");
+        assert_eq!(f.combination(), (Combine::Max, Combine::Min));
+        // Inside the L below the top, outside in the notch and above.
+        assert!(f.value(&Point3::new(-0.3, 0.4, -0.2)) < 0.0);
+        assert!(f.value(&Point3::new(0.4, -0.3, -0.2)) < 0.0);
+        assert!(f.value(&Point3::new(0.3, 0.3, -0.2)) > 0.0);
+        assert!(f.value(&Point3::new(-0.3, -0.3, 0.2)) > 0.0);
+        for q in &p {
+            assert!(f.value(q).abs() < 1e-9, "{q}: {}", f.value(q));
+        }
+    }
+
+    #[test]
+    fn one_region_or_too_few_points_is_no_sharp_function() {
+        let (p, n, mut l) = edge(true, 1.0, 8);
+        let one = vec![0; l.len()];
+        assert!(SharpFunction::fit(&p, &n, &one, 1.0, 0.3).is_none());
+        // Region 1 reduced to fewer than MIN_SIDE points.
+        let mut ones = 0;
+        for x in l.iter_mut() {
+            if *x == 1 {
+                ones += 1;
+                if ones >= MIN_SIDE {
+                    *x = NO_REGION;
+                }
+            }
+        }
+        assert!(SharpFunction::fit(&p, &n, &l, 1.0, 0.3).is_none());
+    }
+}
