@@ -13,6 +13,9 @@ use crate::mesh::{Mesh, Topology};
 use crate::metrics::{deviation, Deviation};
 use crate::normals::{oriented_points, NormalSource};
 use crate::polygonize::components::keep_supported_components;
+use crate::polygonize::crease_split::{
+    split_at_creases, CreaseSplitOptions, CreaseSplitReport, SideField,
+};
 use crate::polygonize::{marching_cubes, refine, relax, RefineOptions, RefineReport};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -42,6 +45,10 @@ pub struct ReconstructOptions {
     pub normal_neighbours: usize,
     /// Measure the deviation of the input points from the result (default true).
     pub measure_deviation: bool,
+    /// Keep sharp edges: the input is segmented into smooth regions ([`crate::features`]) and
+    /// cells crossed by a crease get one function per region ([`crate::implicit::sharp`]);
+    /// without regions (an organic model) the result is as without (default false).
+    pub sharp: bool,
 }
 
 impl Default for ReconstructOptions {
@@ -56,6 +63,7 @@ impl Default for ReconstructOptions {
             max_faces: 4_000_000,
             normal_neighbours: crate::normals::DEFAULT_NEIGHBOURS,
             measure_deviation: true,
+            sharp: false,
         }
     }
 }
@@ -100,6 +108,11 @@ pub struct ReconstructReport {
     pub euler_characteristic: i64,
     pub components: usize,
     pub deviation: Option<Deviation>,
+    /// The smooth regions the implicit was fitted with (`sharp`; `None` when off or when the
+    /// input has a single region).
+    pub features: Option<crate::features::SegmentStats>,
+    /// The mesh's edges split at the creases (`sharp`).
+    pub creases: Option<CreaseSplitReport>,
     pub timings: Timings,
 }
 
@@ -117,6 +130,34 @@ pub fn mean_spacing(points: &[nalgebra::Point3<f64>], kd: &crate::spatial::KdTre
         .map(|p| kd.knn(p, K + 1).last().map_or(0.0, |x| x.1))
         .collect();
     s.iter().sum::<f64>() / s.len() as f64 / (K as f64 / std::f64::consts::PI).sqrt()
+}
+
+/// The sharp implicit as [`split_at_creases`] sees it: of the regions among the input points
+/// nearest to x, the one whose surface passes nearest to x (the labels of the input points
+/// beside a crease are a point spacing uncertain, the sides' surfaces are not), and the
+/// implicit on that region's side of every crease.
+struct SharpField<'a> {
+    seg: &'a crate::features::Segmentation,
+    f: &'a PouImplicit,
+}
+
+/// Labelled input points looked at by [`SharpField::region`].
+const REGION_VOTERS: usize = 16;
+
+impl SideField for SharpField<'_> {
+    fn region(&self, x: &nalgebra::Point3<f64>) -> u32 {
+        let near = self.seg.regions_near(x, REGION_VOTERS);
+        if near.len() == 1 {
+            return near[0].0;
+        }
+        near.iter()
+            .map(|&(r, _)| (r, self.f.side_value_and_gradient(r, x).0.abs()))
+            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+            .map_or_else(|| self.seg.region_near(x), |(r, _)| r)
+    }
+    fn side(&self, region: u32, x: &nalgebra::Point3<f64>) -> (f64, nalgebra::Vector3<f64>) {
+        self.f.side_value_and_gradient(region, x)
+    }
 }
 
 /// Reconstructs a closed mesh from a mesh (its referenced vertices and face normals) or a point
@@ -141,9 +182,23 @@ pub fn reconstruct(
     let op = oriented_points(input, opts.normal_neighbours)?;
     timings.normals = t.elapsed().as_secs_f64();
 
-    progress("fit", 0.1);
     let t = Instant::now();
-    let f = PouImplicit::fit(&op.points, &op.normals, &opts.fit)?;
+    let segmentation = if opts.sharp {
+        progress("features", 0.1);
+        let seg =
+            crate::features::segment(input, &op, &crate::features::FeatureOptions::default())?;
+        seg.has_features().then_some(seg)
+    } else {
+        None
+    };
+    progress("fit", 0.15);
+    let f = match &segmentation {
+        Some(seg) => {
+            let (l, n) = seg.label_oriented(&op.points, &op.normals)?;
+            PouImplicit::fit_with_regions(&op.points, &n, Some(&l), &opts.fit)?
+        }
+        None => PouImplicit::fit(&op.points, &op.normals, &opts.fit)?,
+    };
     timings.fit = t.elapsed().as_secs_f64();
     let diag = f.diagonal();
     let spacing = mean_spacing(f.points().0, f.kdtree());
@@ -192,6 +247,11 @@ pub fn reconstruct(
     };
     let (mut mesh, refine_report) = refine(mesh, &f, &ropts, &proj);
     timings.refine = t.elapsed().as_secs_f64();
+    // Sharp: the triangles that cut across a crease split where its two faces meet.
+    let creases = segmentation.as_ref().map(|seg| {
+        let field = SharpField { seg, f: &f };
+        split_at_creases(&mut mesh, &field, &CreaseSplitOptions::default())
+    });
     // Global orientation check: a closed result must enclose a positive volume (it would not if
     // the normals, and so the implicit's sign, came out inverted).
     let flipped_output = mesh.signed_volume() < 0.0;
@@ -235,6 +295,8 @@ pub fn reconstruct(
             + mesh.faces.len() as i64,
         components: topo.components.len(),
         deviation: dev,
+        features: segmentation.map(|s| s.stats),
+        creases,
         timings,
     };
     Ok((mesh, report))

@@ -30,6 +30,11 @@ pub struct Args {
     /// Write PLY/STL as text.
     #[arg(long)]
     pub ascii: bool,
+    /// Keep sharp edges (machined parts): find the smooth regions and creases first (as
+    /// `scansurf features`) and fit one function per region in the cells a crease crosses.
+    /// Inputs with one smooth region (organic scans) come out as without it.
+    #[arg(long)]
+    pub sharp: bool,
 }
 
 pub fn run(a: Args, quiet: bool) -> Result<()> {
@@ -47,6 +52,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     let mut opts = ReconstructOptions {
         resolution: a.resolution,
         tolerance: a.tolerance,
+        sharp: a.sharp,
         ..ReconstructOptions::default()
     };
     opts.fit.tolerance = a.fit_tolerance;

@@ -30,10 +30,10 @@ use super::poly::{Degree, Frame, HeightPoly};
 use nalgebra::{Point3, Vector3};
 
 /// Fewest points of one region in a domain for a side of its own.
-pub const MIN_SIDE: usize = 8;
+pub const MIN_SIDE: usize = 4;
 
-/// Fewest points for a quadratic side (a plane below).
-const QUADRATIC_FROM: usize = 16;
+/// Fewest points for a quadratic side (a plane below; [`HeightPoly::fit`] needs 9).
+const QUADRATIC_FROM: usize = 9;
 
 /// Most sides of one sharp function (an edge: 2, a corner: 3; more are split further).
 pub const MAX_SIDES: usize = 3;
@@ -158,7 +158,9 @@ impl SharpFunction {
 
     /// Fits a sharp function to a domain's points: `labels[i]` is the region of `points[i]`
     /// ([`NO_REGION`] for none), `normals` their one-sided unit normals, `scale` the domain's
-    /// length scale, `min_normal_cos` the height-function test of [`Frame::from_normals`].
+    /// length scale, `min_normal_cos` the height-function test of [`Frame::from_normals`]. A
+    /// side stays a plane when that leaves none of its points farther than `flat` (a plane
+    /// extended past the crease stays where the face is; a quadratic bends away from it).
     /// `None` unless two or three regions hold at least [`MIN_SIDE`] points each and every side
     /// can be fitted (not yet assessed against the tolerance: the caller does that, over all
     /// the points).
@@ -168,6 +170,7 @@ impl SharpFunction {
         labels: &[u32],
         scale: f64,
         min_normal_cos: f64,
+        flat: f64,
     ) -> Option<SharpFunction> {
         let groups = region_groups(labels, MIN_SIDE);
         if !(2..=MAX_SIDES).contains(&groups.len()) {
@@ -178,7 +181,7 @@ impl SharpFunction {
         for (region, idx) in groups {
             let p: Vec<Point3<f64>> = idx.iter().map(|&i| points[i]).collect();
             let n: Vec<Vector3<f64>> = idx.iter().map(|&i| normals[i]).collect();
-            let poly = fit_side(&p, &n, scale, min_normal_cos)?;
+            let poly = fit_side(&p, &n, scale, min_normal_cos, flat)?;
             sides.push(SharpSide { region, poly });
             members.push(p);
         }
@@ -226,23 +229,30 @@ pub fn region_groups(labels: &[u32], min: usize) -> Vec<(u32, Vec<usize>)> {
     out
 }
 
-/// One side's height polynomial: fitted, then fitted again without the points farther than
-/// three times the median residual (a few points of the other face given to this region beside
-/// the crease tilt it otherwise).
+/// One side's height polynomial: a plane when it leaves no point farther than `flat`, else a
+/// quadratic (from [`QUADRATIC_FROM`] points); fitted, then fitted again without the points
+/// farther than three times the median residual (a few points of the other face given to this
+/// region beside the crease tilt it otherwise).
 fn fit_side(
     p: &[Point3<f64>],
     n: &[Vector3<f64>],
     scale: f64,
     min_normal_cos: f64,
+    flat: f64,
 ) -> Option<HeightPoly> {
     let frame = Frame::from_normals(p, n, scale, min_normal_cos)?;
+    let plane = HeightPoly::fit(p, frame, Degree::Linear).ok()?;
+    let is_flat = p.iter().all(|x| plane.value(x).abs() <= flat);
     let degree = |k: usize| {
-        if k >= QUADRATIC_FROM {
+        if !is_flat && k >= QUADRATIC_FROM {
             Degree::Quadratic
         } else {
             Degree::Linear
         }
     };
+    if is_flat {
+        return Some(plane);
+    }
     let first = HeightPoly::fit(p, frame, degree(p.len())).ok()?;
     let r: Vec<f64> = p.iter().map(|x| first.value(x).abs()).collect();
     let cut = 3.0 * median(r.iter().copied());
@@ -298,7 +308,7 @@ mod tests {
     #[test]
     fn convex_edge_is_the_max_of_its_faces() {
         let (p, n, l) = edge(true, 1.0, 8);
-        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3).unwrap();
+        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3, 1e-9).unwrap();
         assert_eq!(f.combination().0, Combine::Max);
         // Zero on both faces, up to the edge.
         for q in &p {
@@ -325,7 +335,7 @@ mod tests {
     fn concave_edge_is_the_min_of_its_faces() {
         // The solid is the complement: x >= 0 or y >= 0, normals pointing into x, y < 0.
         let (p, n, l) = edge(false, 1.0, 8);
-        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3).unwrap();
+        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3, 1e-9).unwrap();
         assert_eq!(f.combination().0, Combine::Min);
         for q in &p {
             assert!(f.value(q).abs() < 1e-9);
@@ -366,7 +376,7 @@ mod tests {
     #[test]
     fn convex_corner_is_the_max_of_three_faces() {
         let (p, n, l) = corner(6);
-        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3).unwrap();
+        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3, 1e-9).unwrap();
         assert_eq!(f.combination(), (Combine::Max, Combine::Max));
         assert!(f.value(&Point3::origin()).abs() < 1e-9);
         assert!((f.value(&Point3::new(-0.1, -0.2, -0.3)) + 0.1).abs() < 1e-9);
@@ -405,7 +415,7 @@ mod tests {
                 }
             }
         }
-        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3).unwrap();
+        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3, 1e-9).unwrap();
         assert_eq!(f.sides()[0].region, 2, "the top goes first");
         assert_eq!(f.combination(), (Combine::Max, Combine::Min));
         // Inside the L below the top, outside in the notch and above.
@@ -422,7 +432,7 @@ mod tests {
     fn one_region_or_too_few_points_is_no_sharp_function() {
         let (p, n, mut l) = edge(true, 1.0, 8);
         let one = vec![0; l.len()];
-        assert!(SharpFunction::fit(&p, &n, &one, 1.0, 0.3).is_none());
+        assert!(SharpFunction::fit(&p, &n, &one, 1.0, 0.3, 1e-9).is_none());
         // Region 1 reduced to fewer than MIN_SIDE points.
         let mut ones = 0;
         for x in l.iter_mut() {
@@ -433,6 +443,6 @@ mod tests {
                 }
             }
         }
-        assert!(SharpFunction::fit(&p, &n, &l, 1.0, 0.3).is_none());
+        assert!(SharpFunction::fit(&p, &n, &l, 1.0, 0.3, 1e-9).is_none());
     }
 }

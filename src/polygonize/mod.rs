@@ -10,6 +10,7 @@
 //! target number of patches.
 
 pub mod components;
+pub mod crease_split;
 pub mod marching_cubes;
 pub mod relax;
 pub mod subdivide;

@@ -334,6 +334,20 @@ impl PouImplicit {
         normals: &[Vector3<f64>],
         opts: &FitOptions,
     ) -> Result<PouImplicit> {
+        Self::fit_with_regions(points, normals, None, opts)
+    }
+
+    /// [`Self::fit`] with the smooth region of every point ([`crate::features`];
+    /// [`super::sharp::NO_REGION`] for none) and normals of that region alone: a cell whose
+    /// support holds two or three regions is first fitted with a sharp function
+    /// ([`super::sharp`]), so the zero set keeps the creases between them. `None` is
+    /// [`Self::fit`].
+    pub fn fit_with_regions(
+        points: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        regions: Option<&[u32]>,
+        opts: &FitOptions,
+    ) -> Result<PouImplicit> {
         opts.validate()?;
         if points.len() != normals.len() {
             return Err(Error::Degenerate(format!(
@@ -342,9 +356,19 @@ impl PouImplicit {
                 normals.len()
             )));
         }
+        if let Some(r) = regions {
+            if r.len() != points.len() {
+                return Err(Error::Degenerate(format!(
+                    "{} points but {} region labels",
+                    points.len(),
+                    r.len()
+                )));
+            }
+        }
         let mut pts = Vec::with_capacity(points.len());
         let mut nrm = Vec::with_capacity(points.len());
-        for (p, n) in points.iter().zip(normals) {
+        let mut labels = Vec::new();
+        for (i, (p, n)) in points.iter().zip(normals).enumerate() {
             if !p.coords.iter().all(|c| c.is_finite()) {
                 return Err(Error::Degenerate("non-finite point coordinate".into()));
             }
@@ -352,6 +376,9 @@ impl PouImplicit {
                 if u.iter().all(|c| c.is_finite()) {
                     pts.push(*p);
                     nrm.push(u);
+                    if let Some(r) = regions {
+                        labels.push(r[i]);
+                    }
                 }
             }
         }
@@ -405,6 +432,7 @@ impl PouImplicit {
             tol,
             spacing,
             root_half: 0.5 * root.size,
+            labels: regions.map(|_| labels.as_slice()),
         };
         let tree = Octree::build(root, &pts, opts.max_depth, |c| builder.decide(c));
         let mut stats = FitStats {
@@ -503,6 +531,14 @@ impl PouImplicit {
         out
     }
 
+    /// F and grad F on the side of `region` of every crease: sharp cells ([`super::sharp`])
+    /// contribute that region's own polynomial where they have one, so the zero set continues
+    /// the region's surface past its creases (the two surfaces whose meeting is the crease,
+    /// f_a = f_b = 0). Away from sharp cells this is [`Implicit::value_and_gradient`].
+    pub fn side_value_and_gradient(&self, region: u32, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+        self.blend(x, true, Some(region))
+    }
+
     /// Signed distance to the nearest point (sign from its normal): F outside all supports.
     fn fallback(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
         let (i, d) = self.kd.nearest(x);
@@ -595,7 +631,12 @@ impl PouImplicit {
     /// so F is C2 there. Outside all supports (beyond the root cube's overlap) F is the signed
     /// distance to the nearest point.
     #[inline]
-    fn blend(&self, x: &Point3<f64>, with_gradient: bool) -> (f64, Vector3<f64>) {
+    fn blend(
+        &self,
+        x: &Point3<f64>,
+        with_gradient: bool,
+        side: Option<u32>,
+    ) -> (f64, Vector3<f64>) {
         #[derive(Default)]
         struct Acc {
             s: f64,
@@ -633,7 +674,10 @@ impl PouImplicit {
                 }
             };
             if with_gradient {
-                let (f, gf) = c.function.value_and_gradient(x);
+                let (f, gf) = match side {
+                    None => c.function.value_and_gradient(x),
+                    Some(r) => c.function.side_value_and_gradient(r, x),
+                };
                 // d d / d x_r = 2 t_r / a_r * prod_{s != r} q_s
                 let ih = c.inv_half;
                 let gd = Vector3::new(
@@ -659,7 +703,10 @@ impl PouImplicit {
                 }
             } else {
                 a.s += w;
-                a.a += w * c.function.value(x);
+                a.a += w * match side {
+                    None => c.function.value(x),
+                    Some(r) => c.function.side_value_and_gradient(r, x).0,
+                };
                 if need_cover {
                     a.c += psi(t.x).0 * psi(t.y).0 * psi(t.z).0;
                 }
@@ -709,13 +756,13 @@ impl PouImplicit {
 
 impl Implicit for PouImplicit {
     fn value(&self, x: &Point3<f64>) -> f64 {
-        self.blend(x, false).0
+        self.blend(x, false, None).0
     }
     fn gradient(&self, x: &Point3<f64>) -> Vector3<f64> {
-        self.blend(x, true).1
+        self.blend(x, true, None).1
     }
     fn value_and_gradient(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
-        self.blend(x, true)
+        self.blend(x, true, None)
     }
 }
 

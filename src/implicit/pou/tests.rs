@@ -288,3 +288,66 @@ fn bad_input_is_an_error() {
     };
     assert!(PouImplicit::fit(&p, &n, &bad).is_err());
 }
+
+/// Points on the faces of the box [-1, 1] x [-1, 1] x [-0.5, 0.5], `k` per unit length, with
+/// outward normals and their face as region (0..6).
+fn box_points(k: usize) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>, Vec<u32>) {
+    let half = [1.0, 1.0, 0.5];
+    let (mut p, mut n, mut l) = (Vec::new(), Vec::new(), Vec::new());
+    for axis in 0..3 {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let (nu, nv) = (
+            (2.0 * half[u] * k as f64) as usize,
+            (2.0 * half[v] * k as f64) as usize,
+        );
+        for side in [-1.0, 1.0] {
+            for i in 0..nu {
+                for j in 0..nv {
+                    let mut x = Point3::origin();
+                    x[axis] = side * half[axis];
+                    x[u] = -half[u] + 2.0 * half[u] * (i as f64 + 0.5) / nu as f64;
+                    x[v] = -half[v] + 2.0 * half[v] * (j as f64 + 0.5) / nv as f64;
+                    p.push(x);
+                    n.push(Vector3::ith(axis, side));
+                    l.push((2 * axis) as u32 + u32::from(side > 0.0));
+                }
+            }
+        }
+    }
+    (p, n, l)
+}
+
+#[test]
+fn regions_keep_the_edges_of_a_box_sharp() {
+    let (p, n, l) = box_points(20);
+    let plain = PouImplicit::fit(&p, &n, &FitOptions::default()).unwrap();
+    let sharp = PouImplicit::fit_with_regions(&p, &n, Some(&l), &FitOptions::default()).unwrap();
+    assert_eq!(plain.stats().sharp, 0);
+    assert!(sharp.stats().sharp > 0, "{:?}", sharp.stats());
+    // Points on the box's edges (x = 1, z = 0.5) and its corner: on the sharp zero set within
+    // twice the tolerance, off the smooth one (rounded) by more.
+    let tol = 2.0 * sharp.stats().tolerance * sharp.diagonal();
+    let edge: Vec<Point3<f64>> = (0..9)
+        .map(|i| Point3::new(1.0, -0.8 + 0.2 * i as f64, 0.5))
+        .chain([Point3::new(1.0, 1.0, 0.5)])
+        .collect();
+    let worst = |f: &PouImplicit| edge.iter().map(|x| f.value(x).abs()).fold(0.0, f64::max);
+    assert!(worst(&sharp) <= tol, "sharp {} tol {tol}", worst(&sharp));
+    assert!(
+        worst(&plain) > 2.0 * worst(&sharp),
+        "plain {} sharp {}",
+        worst(&plain),
+        worst(&sharp)
+    );
+    // Beside an edge each side continues its own face: region 1 (x = 1) on the top's side.
+    let x = Point3::new(1.0, 0.0, 0.52);
+    let (v, g) = sharp.side_value_and_gradient(1, &x);
+    assert!(
+        v.abs() < tol && (g.normalize() - Vector3::x()).norm() < 0.05,
+        "{v} {g}"
+    );
+    let (v, _) = sharp.side_value_and_gradient(5, &x);
+    assert!((v - 0.02).abs() < tol, "{v}");
+    // Labels must match the points.
+    assert!(PouImplicit::fit_with_regions(&p, &n, Some(&l[1..]), &FitOptions::default()).is_err());
+}

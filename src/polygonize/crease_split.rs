@@ -1,0 +1,413 @@
+//! Creases put into a triangle mesh extracted from a sharp implicit: every mesh edge whose two
+//! ends lie on different smooth regions is split where the two regions' surfaces meet, and
+//! every triangle with three regions gets the corner where the three meet (the feature-
+//! sensitive step of Kobbelt, Botsch, Schwanecke and Seidel 2001, "Feature sensitive surface
+//! extraction from volume data", applied to the mesh after marching cubes rather than inside
+//! each cube: marching cubes puts its vertices on the cube edges, so a triangle spanning a
+//! crease cuts it off by up to half a cube, whatever the implicit).
+//!
+//! **Crease point of an edge (a, b)**, a on region A and b on region B: Gauss-Newton on the two
+//! sides' functions (the implicit evaluated with region A's, then B's polynomial in the sharp
+//! cells, [`SideField`]) from the edge's midpoint, each step the smallest that zeroes their
+//! linearization:
+//!
+//! ```text
+//! r = (f_A(x), f_B(x)),  J = [grad f_A; grad f_B] (2 x 3),  x <- x - J^T (J J^T)^-1 r
+//! ```
+//!
+//! which converges to the point of the crease line f_A = f_B = 0 nearest to the start. It is
+//! kept when it converged, the two gradients are not near parallel (the sides differ there: a
+//! sharp cell covers the point) and it lies between a and b (its projection on the edge within
+//! the edge, its distance from it under half the edge): otherwise the edge stays whole. The
+//! corner of a triangle with three regions is the same iteration with three functions (a 3 x 3
+//! system).
+//!
+//! **Retriangulation.** An edge split is shared by both triangles of the edge, so the mesh stays
+//! closed and manifold. A triangle with one split edge becomes two triangles (the new vertex
+//! joined to the opposite corner); with two, a triangle at the corner they share and a quad
+//! (split along its shorter diagonal); with three, three corner triangles around a middle one,
+//! which is fanned from the corner point when that was found. Every new triangle keeps the
+//! orientation of the one it replaces.
+
+use crate::mesh::Mesh;
+use nalgebra::{Matrix2, Matrix3, Point3, Vector2, Vector3};
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// What the splitting needs to know of the surface.
+pub trait SideField: Sync {
+    /// The smooth region of the surface near `x`.
+    fn region(&self, x: &Point3<f64>) -> u32;
+    /// f and grad f of the surface of `region`, continued past its creases.
+    fn side(&self, region: u32, x: &Point3<f64>) -> (f64, Vector3<f64>);
+}
+
+/// Options of [`split_at_creases`].
+#[derive(Debug, Clone, Copy)]
+pub struct CreaseSplitOptions {
+    /// Newton steps at most (default 30).
+    pub max_steps: usize,
+    /// Converged when every |f| is under this fraction of the edge length (default 1e-4).
+    pub tolerance: f64,
+    /// Smallest sine of the angle between two sides' gradients (default 0.1, about 6 degrees):
+    /// below it the sides are one smooth surface there.
+    pub min_sine: f64,
+}
+
+impl Default for CreaseSplitOptions {
+    fn default() -> Self {
+        CreaseSplitOptions {
+            max_steps: 30,
+            tolerance: 1e-4,
+            min_sine: 0.1,
+        }
+    }
+}
+
+/// What [`split_at_creases`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct CreaseSplitReport {
+    /// Edges whose ends lie on different regions.
+    pub crossing_edges: usize,
+    /// Of those, split at the crease.
+    pub split_edges: usize,
+    /// Triangles with three regions.
+    pub corner_triangles: usize,
+    /// Of those, given their corner point.
+    pub corners: usize,
+}
+
+/// The point where the surfaces of `regions` meet nearest to `start` (two regions: a crease
+/// point, three: a corner), or `None` (module doc).
+pub fn meet_point(
+    field: &dyn SideField,
+    regions: &[u32],
+    start: Point3<f64>,
+    scale: f64,
+    opts: &CreaseSplitOptions,
+) -> Option<Point3<f64>> {
+    let mut x = start;
+    for _ in 0..opts.max_steps {
+        let s: Vec<(f64, Vector3<f64>)> = regions.iter().map(|&r| field.side(r, &x)).collect();
+        // The sides must differ: gradients far from parallel.
+        for i in 0..s.len() {
+            for j in i + 1..s.len() {
+                let (gi, gj) = (s[i].1, s[j].1);
+                let sine = gi.cross(&gj).norm() / (gi.norm() * gj.norm()).max(1e-300);
+                // (NaN from a zero gradient fails too.)
+                if sine.is_nan() || sine < opts.min_sine {
+                    return None;
+                }
+            }
+        }
+        let done = s.iter().all(|(f, _)| f.abs() <= opts.tolerance * scale);
+        if done {
+            return Some(x);
+        }
+        let step = match s.len() {
+            2 => {
+                let (g0, g1) = (s[0].1, s[1].1);
+                let jjt = Matrix2::new(g0.dot(&g0), g0.dot(&g1), g1.dot(&g0), g1.dot(&g1));
+                let y = jjt.try_inverse()? * Vector2::new(s[0].0, s[1].0);
+                g0 * y.x + g1 * y.y
+            }
+            3 => {
+                let j = Matrix3::from_rows(&[
+                    s[0].1.transpose(),
+                    s[1].1.transpose(),
+                    s[2].1.transpose(),
+                ]);
+                j.try_inverse()? * Vector3::new(s[0].0, s[1].0, s[2].0)
+            }
+            _ => return None,
+        };
+        if !step.iter().all(|c| c.is_finite()) || step.norm() > 2.0 * scale {
+            return None;
+        }
+        x -= step;
+    }
+    None
+}
+
+/// Splits the edges and triangles of `mesh` that cross creases (module doc).
+pub fn split_at_creases(
+    mesh: &mut Mesh,
+    field: &dyn SideField,
+    opts: &CreaseSplitOptions,
+) -> CreaseSplitReport {
+    let mut report = CreaseSplitReport::default();
+    let label: Vec<u32> = mesh.positions.par_iter().map(|p| field.region(p)).collect();
+    // Crossing edges, each once, in the order of the faces.
+    let mut crossing: Vec<(u32, u32)> = Vec::new();
+    let mut seen: HashMap<(u32, u32), usize> = HashMap::new();
+    for f in &mesh.faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            if label[a as usize] != label[b as usize] {
+                let key = (a.min(b), a.max(b));
+                seen.entry(key).or_insert_with(|| {
+                    crossing.push(key);
+                    crossing.len() - 1
+                });
+            }
+        }
+    }
+    report.crossing_edges = crossing.len();
+    let pos = &mesh.positions;
+    let found: Vec<Option<Point3<f64>>> = crossing
+        .par_iter()
+        .map(|&(a, b)| {
+            let (pa, pb) = (pos[a as usize], pos[b as usize]);
+            let e = pb - pa;
+            let len = e.norm();
+            if len <= 0.0 {
+                return None;
+            }
+            let mid = Point3::from((pa.coords + pb.coords) * 0.5);
+            let regions = [label[a as usize], label[b as usize]];
+            let c = meet_point(field, &regions, mid, len, opts)?;
+            let t = (c - pa).dot(&e) / (len * len);
+            let off = ((c - pa) - e * t).norm();
+            (t > 0.0 && t < 1.0 && off <= 0.5 * len).then_some(c)
+        })
+        .collect();
+    let mut split: HashMap<(u32, u32), u32> = HashMap::new();
+    for (&key, c) in crossing.iter().zip(&found) {
+        if let Some(c) = c {
+            split.insert(key, mesh.positions.len() as u32);
+            mesh.positions.push(*c);
+        }
+    }
+    report.split_edges = split.len();
+    let mid_of = |a: u32, b: u32| split.get(&(a.min(b), a.max(b))).copied();
+    // Corner points of triangles with three regions and three split edges.
+    let corner_faces: Vec<usize> = (0..mesh.faces.len())
+        .filter(|&i| {
+            let f = mesh.faces[i];
+            (0..3).all(|k| mid_of(f[k], f[(k + 1) % 3]).is_some())
+        })
+        .collect();
+    report.corner_triangles = corner_faces.len();
+    let corner_pts: Vec<Option<Point3<f64>>> = corner_faces
+        .par_iter()
+        .map(|&i| {
+            let f = mesh.faces[i];
+            let p = f.map(|v| mesh.positions[v as usize]);
+            let centre = Point3::from((p[0].coords + p[1].coords + p[2].coords) / 3.0);
+            let scale = (p[1] - p[0])
+                .norm()
+                .max((p[2] - p[1]).norm())
+                .max((p[0] - p[2]).norm());
+            let regions = f.map(|v| label[v as usize]);
+            let c = meet_point(field, &regions, centre, scale, opts)?;
+            // Inside the triangle (barycentric coordinates of its projection all positive).
+            let n = (p[1] - p[0]).cross(&(p[2] - p[0]));
+            let inside = (0..3).all(|k| {
+                let (u, v) = (p[k], p[(k + 1) % 3]);
+                (v - u).cross(&(c - u)).dot(&n) > 0.0
+            });
+            inside.then_some(c)
+        })
+        .collect();
+    let mut corner_of: HashMap<usize, u32> = HashMap::new();
+    for (&i, c) in corner_faces.iter().zip(&corner_pts) {
+        if let Some(c) = c {
+            corner_of.insert(i, mesh.positions.len() as u32);
+            mesh.positions.push(*c);
+        }
+    }
+    report.corners = corner_of.len();
+    let pos = &mesh.positions;
+    let dist2 = |a: u32, b: u32| (pos[a as usize] - pos[b as usize]).norm_squared();
+    let mut faces = Vec::with_capacity(mesh.faces.len() + 2 * split.len());
+    for (i, &f) in mesh.faces.iter().enumerate() {
+        let m: [Option<u32>; 3] = [0, 1, 2].map(|k| mid_of(f[k], f[(k + 1) % 3]));
+        match m.iter().filter(|x| x.is_some()).count() {
+            0 => faces.push(f),
+            1 => {
+                // Rotate so that the split edge is (f0, f1).
+                let k = (0..3).find(|&k| m[k].is_some()).unwrap_or(0);
+                let (a, b, c) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
+                let x = m[k].unwrap_or(a);
+                faces.push([a, x, c]);
+                faces.push([x, b, c]);
+            }
+            2 => {
+                // Rotate so that the whole edge is (f1, f2): f0 is the corner both splits share.
+                let k = (0..3).find(|&k| m[(k + 1) % 3].is_none()).unwrap_or(0);
+                let (a, b, c) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
+                let (x, y) = (m[k].unwrap_or(a), m[(k + 2) % 3].unwrap_or(a));
+                // x on (a, b), y on (c, a).
+                faces.push([a, x, y]);
+                if dist2(x, c) <= dist2(b, y) {
+                    faces.push([x, b, c]);
+                    faces.push([x, c, y]);
+                } else {
+                    faces.push([x, b, y]);
+                    faces.push([b, c, y]);
+                }
+            }
+            _ => {
+                let [x, y, z] = m.map(|v| v.unwrap_or(0));
+                // x on (f0, f1), y on (f1, f2), z on (f2, f0).
+                faces.push([f[0], x, z]);
+                faces.push([x, f[1], y]);
+                faces.push([z, y, f[2]]);
+                match corner_of.get(&i) {
+                    Some(&o) => {
+                        faces.push([x, y, o]);
+                        faces.push([y, z, o]);
+                        faces.push([z, x, o]);
+                    }
+                    None => faces.push([x, y, z]),
+                }
+            }
+        }
+    }
+    mesh.faces = faces;
+    if let Some(n) = &mut mesh.normals {
+        n.resize(mesh.positions.len(), Vector3::zeros());
+    }
+    report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::Topology;
+
+    /// The cube [-1, 1]^3 as a sharp field: region k of face k (0..6: -x, +x, -y, +y, -z, +z),
+    /// each side the plane of its face.
+    struct Cube;
+    impl SideField for Cube {
+        fn region(&self, x: &Point3<f64>) -> u32 {
+            let a = x.coords.abs();
+            let k = a.imax();
+            (2 * k + usize::from(x[k] > 0.0)) as u32
+        }
+        fn side(&self, region: u32, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+            let k = (region / 2) as usize;
+            let s = if region % 2 == 1 { 1.0 } else { -1.0 };
+            (s * x[k] - 1.0, Vector3::ith(k, s))
+        }
+    }
+
+    /// A sphere of radius sqrt(3) projected onto the cube: every vertex on a face, triangles
+    /// cutting the edges and corners (a marching-cubes mesh of a cube looks like this).
+    fn rounded_cube(n: usize) -> Mesh {
+        let mut m = crate::mesh::Mesh::default();
+        // An octahedron subdivided n times, pushed onto the cube along rays.
+        let mut pos = vec![
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(-1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+            Point3::new(0.0, -1.0, 0.0),
+            Point3::new(0.0, 0.0, 1.0),
+            Point3::new(0.0, 0.0, -1.0),
+        ];
+        let mut faces: Vec<[u32; 3]> = vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
+        for _ in 0..n {
+            let mut mids: HashMap<(u32, u32), u32> = HashMap::new();
+            let mut out = Vec::new();
+            for f in &faces {
+                let mut mid = |a: u32, b: u32| {
+                    *mids.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                        let p =
+                            Point3::from((pos[a as usize].coords + pos[b as usize].coords) * 0.5);
+                        pos.push(Point3::from(p.coords.normalize()));
+                        pos.len() as u32 - 1
+                    })
+                };
+                let (x, y, z) = (mid(f[0], f[1]), mid(f[1], f[2]), mid(f[2], f[0]));
+                out.extend([[f[0], x, z], [x, f[1], y], [z, y, f[2]], [x, y, z]]);
+            }
+            faces = out;
+        }
+        // Rays onto the cube, nudged off the exact edges so that every vertex has one face.
+        for p in pos.iter_mut() {
+            let d = Vector3::new(p.x + 1e-3, p.y + 2e-3, p.z + 3e-3);
+            *p = Point3::from(d / d.abs().max());
+        }
+        m.positions = pos;
+        m.faces = faces;
+        m
+    }
+
+    #[test]
+    fn cube_edges_and_corners_come_back() {
+        let mut mesh = rounded_cube(4);
+        let before = Topology::build(&mesh);
+        assert!(before.is_closed_manifold());
+        let r = split_at_creases(&mut mesh, &Cube, &CreaseSplitOptions::default());
+        assert!(
+            r.split_edges > 0 && r.split_edges == r.crossing_edges,
+            "{r:?}"
+        );
+        assert_eq!(r.corners, r.corner_triangles);
+        assert!(Topology::build(&mesh).is_closed_manifold());
+        // Every new vertex on an edge of the cube (two coordinates at +-1), the corners on
+        // corners.
+        let old = before.edges.len();
+        let _ = old;
+        let on_edges = mesh
+            .positions
+            .iter()
+            .filter(|p| {
+                p.coords
+                    .iter()
+                    .filter(|c| (c.abs() - 1.0).abs() < 1e-6)
+                    .count()
+                    >= 2
+            })
+            .count();
+        assert!(on_edges >= r.split_edges + r.corners, "{on_edges} {r:?}");
+        let corners = mesh
+            .positions
+            .iter()
+            .filter(|p| p.coords.iter().all(|c| (c.abs() - 1.0).abs() < 1e-6))
+            .count();
+        assert_eq!(corners, 8, "{r:?}");
+        // No triangle spans two faces any more: each lies in one face plane.
+        for f in &mesh.faces {
+            let p = f.map(|v| mesh.positions[v as usize]);
+            let in_plane = (0..3).any(|k| {
+                let v = p[0][k];
+                (v.abs() - 1.0).abs() < 1e-6 && p.iter().all(|q| (q[k] - v).abs() < 1e-6)
+            });
+            assert!(in_plane, "{p:?}");
+        }
+        // Outward orientation kept: positive volume.
+        assert!(mesh.signed_volume() > 7.0, "{}", mesh.signed_volume());
+    }
+
+    #[test]
+    fn smooth_fields_split_nothing() {
+        struct Ball;
+        impl SideField for Ball {
+            fn region(&self, x: &Point3<f64>) -> u32 {
+                u32::from(x.x > 0.0)
+            }
+            fn side(&self, _: u32, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+                (x.coords.norm() - 1.0, x.coords.normalize())
+            }
+        }
+        let mut mesh = rounded_cube(3);
+        for p in mesh.positions.iter_mut() {
+            *p = Point3::from(p.coords.normalize());
+        }
+        let faces = mesh.faces.clone();
+        let r = split_at_creases(&mut mesh, &Ball, &CreaseSplitOptions::default());
+        assert!(r.crossing_edges > 0);
+        assert_eq!(r.split_edges, 0);
+        assert_eq!(mesh.faces, faces);
+    }
+}
