@@ -151,45 +151,11 @@ impl Segmentation {
         out
     }
 
-    /// The regions' points, their one-sided normals and their region ids, region after region:
-    /// the input of a feature-aware implicit
-    /// ([`crate::implicit::PouImplicit::fit_with_regions`]).
-    pub fn oriented_regions(&self) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>, Vec<u32>) {
-        let mut p = Vec::new();
-        let mut n = Vec::new();
-        let mut l = Vec::new();
-        for (r, reg) in self.regions.iter().enumerate() {
-            p.extend_from_slice(&reg.points);
-            n.extend_from_slice(&reg.normals);
-            l.extend(std::iter::repeat_n(r as u32, reg.points.len()));
-        }
-        (p, n, l)
-    }
-
-    /// Every one of `points` (with `normals`) labelled with the region of the labelled point
-    /// nearest to it, and given that region's one-sided normal where it is one of the regions'
-    /// own points (a crease vertex of a mesh, left out of the regions, or a cloud point in a
-    /// crease band keeps its own normal): the input of a feature-aware implicit
-    /// ([`crate::implicit::PouImplicit::fit_with_regions`]) that keeps every input point.
-    pub fn label_oriented(
-        &self,
-        points: &[Point3<f64>],
-        normals: &[Vector3<f64>],
-    ) -> Result<(Vec<u32>, Vec<Vector3<f64>>)> {
-        let (rp, rn, _) = self.oriented_regions();
-        let kd = KdTree::build(&rp)?;
-        let mut labels = Vec::with_capacity(points.len());
-        let mut out = Vec::with_capacity(points.len());
-        for (p, n) in points.iter().zip(normals) {
-            labels.push(self.region_near(p));
-            let (j, d) = kd.nearest(p);
-            out.push(if d <= 1e-12 * (1.0 + p.coords.abs().max()) {
-                rn[j]
-            } else {
-                *n
-            });
-        }
-        Ok((labels, out))
+    /// The region of the labelled point nearest to each of `points`: the labels of a
+    /// feature-aware implicit ([`crate::implicit::PouImplicit::fit_with_regions`]) that keeps
+    /// every input point.
+    pub fn labels_of(&self, points: &[Point3<f64>]) -> Vec<u32> {
+        points.iter().map(|p| self.region_near(p)).collect()
     }
 
     /// True when there is more than one region (something for the feature-aware stages to do).

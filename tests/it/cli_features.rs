@@ -10,10 +10,6 @@ fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn tools() -> Option<PathBuf> {
-    common::shared_tools()
-}
-
 fn parts() -> Option<&'static PathBuf> {
     common::make_parts()
 }
@@ -35,26 +31,7 @@ fn features(input: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
 
 /// feature_check.py's verdict on FEATURES.json against the part's STEP truth.
 fn feature_check(features: &Path, truth: &Path) -> serde_json::Value {
-    let (py, _) = common::checker().expect("checked by parts()");
-    let o = std::process::Command::new(py)
-        .arg(tools().unwrap().join("feature_check.py"))
-        .arg(features)
-        .arg(truth)
-        .output()
-        .expect("run feature_check.py");
-    let text = String::from_utf8_lossy(&o.stdout);
-    let line = text
-        .lines()
-        .rev()
-        .find(|l| l.starts_with('{'))
-        .unwrap_or_else(|| {
-            panic!(
-                "feature_check printed no JSON: {text} {}",
-                String::from_utf8_lossy(&o.stderr)
-            )
-        });
-    println!("feature_check {}: {line}", features.display());
-    serde_json::from_str(line).unwrap()
+    common::tool_json("feature_check.py", &[features, truth])
 }
 
 /// The bars: creases along at least 95 % of the true sharp edges (within 1 % of the

@@ -162,6 +162,35 @@ pub fn shared_tools() -> Option<PathBuf> {
     dir.join("make_parts.py").exists().then_some(dir)
 }
 
+/// Runs `../shared/tools/SCRIPT` with the checker's Python on `args` and returns the JSON
+/// object it prints last (feature_check.py, part_check.py).
+pub fn tool_json(script: &str, args: &[&Path]) -> serde_json::Value {
+    let (py, _) = checker().expect("the checker venv (tests skip before without it)");
+    let tools = shared_tools().expect("../shared/tools (tests skip before without it)");
+    let o = std::process::Command::new(py)
+        .arg(tools.join(script))
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("run {script}: {e}"));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let line = text
+        .lines()
+        .rev()
+        .find(|l| l.starts_with('{'))
+        .unwrap_or_else(|| {
+            panic!(
+                "{script} printed no JSON: {text} {}",
+                String::from_utf8_lossy(&o.stderr)
+            )
+        });
+    println!(
+        "{script} {}: {line}",
+        args.first()
+            .map_or(String::new(), |a| a.display().to_string())
+    );
+    serde_json::from_str(line).unwrap()
+}
+
 /// A model of the shared test data (`$SCANSURF_SHARED_DATA` when set, as in tests/it/support,
 /// else `../shared/data`): `None` (the test skips) when it is missing, a failure under CI.
 pub fn shared_model(name: &str) -> Option<PathBuf> {
