@@ -27,7 +27,9 @@
 //! joined to the opposite corner); with two, a triangle at the corner they share and a quad
 //! (split along its shorter diagonal); with three, three corner triangles around a middle one,
 //! which is fanned from the corner point when that was found. Every new triangle keeps the
-//! orientation of the one it replaces.
+//! orientation of the one it replaces; a triangle one of whose pieces would turn over (a crease
+//! point found beside the edge where the surface folds, a corner point off its middle) gives up
+//! its splits, round after round, so the splitting never folds the mesh.
 
 use crate::mesh::Mesh;
 use nalgebra::{Matrix2, Matrix3, Point3, Vector2, Vector3};
@@ -171,6 +173,8 @@ pub fn split_at_creases(
             (t > 0.0 && t < 1.0 && off <= 0.5 * len).then_some(c)
         })
         .collect();
+    // Every candidate becomes a vertex now; those a fold guard rejects are dropped at the end.
+    let first_new = mesh.positions.len();
     let mut split: HashMap<(u32, u32), u32> = HashMap::new();
     for (&key, c) in crossing.iter().zip(&found) {
         if let Some(c) = c {
@@ -178,14 +182,12 @@ pub fn split_at_creases(
             mesh.positions.push(*c);
         }
     }
-    report.split_edges = split.len();
-    let mid_of = |a: u32, b: u32| split.get(&(a.min(b), a.max(b))).copied();
     // Corner points of triangles with three regions and three split edges.
+    let all_split = |f: &[u32; 3], split: &HashMap<(u32, u32), u32>| {
+        (0..3).all(|k| split.contains_key(&edge_key(f[k], f[(k + 1) % 3])))
+    };
     let corner_faces: Vec<usize> = (0..mesh.faces.len())
-        .filter(|&i| {
-            let f = mesh.faces[i];
-            (0..3).all(|k| mid_of(f[k], f[(k + 1) % 3]).is_some())
-        })
+        .filter(|&i| all_split(&mesh.faces[i], &split))
         .collect();
     report.corner_triangles = corner_faces.len();
     let corner_pts: Vec<Option<Point3<f64>>> = corner_faces
@@ -216,59 +218,121 @@ pub fn split_at_creases(
             mesh.positions.push(*c);
         }
     }
-    report.corners = corner_of.len();
-    let pos = &mesh.positions;
-    let dist2 = |a: u32, b: u32| (pos[a as usize] - pos[b as usize]).norm_squared();
-    let mut faces = Vec::with_capacity(mesh.faces.len() + 2 * split.len());
-    for (i, &f) in mesh.faces.iter().enumerate() {
-        let m: [Option<u32>; 3] = [0, 1, 2].map(|k| mid_of(f[k], f[(k + 1) % 3]));
-        match m.iter().filter(|x| x.is_some()).count() {
-            0 => faces.push(f),
-            1 => {
-                // Rotate so that the split edge is (f0, f1).
-                let k = (0..3).find(|&k| m[k].is_some()).unwrap_or(0);
-                let (a, b, c) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
-                let x = m[k].unwrap_or(a);
-                faces.push([a, x, c]);
-                faces.push([x, b, c]);
-            }
-            2 => {
-                // Rotate so that the whole edge is (f1, f2): f0 is the corner both splits share.
-                let k = (0..3).find(|&k| m[(k + 1) % 3].is_none()).unwrap_or(0);
-                let (a, b, c) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
-                let (x, y) = (m[k].unwrap_or(a), m[(k + 2) % 3].unwrap_or(a));
-                // x on (a, b), y on (c, a).
-                faces.push([a, x, y]);
-                if dist2(x, c) <= dist2(b, y) {
-                    faces.push([x, b, c]);
-                    faces.push([x, c, y]);
-                } else {
-                    faces.push([x, b, y]);
-                    faces.push([b, c, y]);
-                }
-            }
-            _ => {
-                let [x, y, z] = m.map(|v| v.unwrap_or(0));
-                // x on (f0, f1), y on (f1, f2), z on (f2, f0).
-                faces.push([f[0], x, z]);
-                faces.push([x, f[1], y]);
-                faces.push([z, y, f[2]]);
-                match corner_of.get(&i) {
-                    Some(&o) => {
-                        faces.push([x, y, o]);
-                        faces.push([y, z, o]);
-                        faces.push([z, x, o]);
-                    }
-                    None => faces.push([x, y, z]),
-                }
-            }
+    // Fold guard: a triangle whose pieces would turn against it gives up its splits (and its
+    // corner), round after round until no piece turns over.
+    for _ in 0..FOLD_ROUNDS {
+        let pos = &mesh.positions;
+        let bad: Vec<usize> = (0..mesh.faces.len())
+            .into_par_iter()
+            .filter(|&i| {
+                let f = mesh.faces[i];
+                let n = tri_normal(pos, &f);
+                pieces(&f, &split, corner_of.get(&i).copied(), pos)
+                    .iter()
+                    .any(|t| tri_normal(pos, t).dot(&n) <= 0.0)
+            })
+            .collect();
+        if bad.is_empty() {
+            break;
         }
+        for i in bad {
+            let f = mesh.faces[i];
+            for k in 0..3 {
+                split.remove(&edge_key(f[k], f[(k + 1) % 3]));
+            }
+            corner_of.remove(&i);
+        }
+        corner_of.retain(|&i, _| all_split(&mesh.faces[i], &split));
+    }
+    report.split_edges = split.len();
+    report.corners = corner_of.len();
+    let mut faces = Vec::with_capacity(mesh.faces.len() + 2 * split.len());
+    for (i, f) in mesh.faces.iter().enumerate() {
+        faces.extend(pieces(
+            f,
+            &split,
+            corner_of.get(&i).copied(),
+            &mesh.positions,
+        ));
     }
     mesh.faces = faces;
+    // Drop the candidates the guard rejected (unreferenced vertices past `first_new`).
+    let used = mesh.referenced();
+    let mut map: Vec<u32> = (0..mesh.positions.len() as u32).collect();
+    let mut next = first_new as u32;
+    for v in first_new..mesh.positions.len() {
+        if used[v] {
+            map[v] = next;
+            mesh.positions[next as usize] = mesh.positions[v];
+            next += 1;
+        }
+    }
+    mesh.positions.truncate(next as usize);
+    for f in mesh.faces.iter_mut() {
+        *f = f.map(|v| map[v as usize]);
+    }
     if let Some(n) = &mut mesh.normals {
         n.resize(mesh.positions.len(), Vector3::zeros());
     }
     report
+}
+
+/// Rounds of the fold guard at most.
+const FOLD_ROUNDS: usize = 8;
+
+/// An undirected edge's key.
+fn edge_key(a: u32, b: u32) -> (u32, u32) {
+    (a.min(b), a.max(b))
+}
+
+/// The (unnormalized) normal of triangle `t`.
+fn tri_normal(pos: &[Point3<f64>], t: &[u32; 3]) -> Vector3<f64> {
+    let p = t.map(|v| pos[v as usize]);
+    (p[1] - p[0]).cross(&(p[2] - p[0]))
+}
+
+/// The triangles that replace `f` given the split edges and its corner point (module doc,
+/// "Retriangulation"), in `f`'s orientation.
+fn pieces(
+    f: &[u32; 3],
+    split: &HashMap<(u32, u32), u32>,
+    corner: Option<u32>,
+    pos: &[Point3<f64>],
+) -> Vec<[u32; 3]> {
+    let m: [Option<u32>; 3] =
+        [0, 1, 2].map(|k| split.get(&edge_key(f[k], f[(k + 1) % 3])).copied());
+    let dist2 = |a: u32, b: u32| (pos[a as usize] - pos[b as usize]).norm_squared();
+    match m {
+        [None, None, None] => vec![*f],
+        [Some(x), Some(y), Some(z)] => {
+            // x on (f0, f1), y on (f1, f2), z on (f2, f0).
+            let mut out = vec![[f[0], x, z], [x, f[1], y], [z, y, f[2]]];
+            match corner {
+                Some(o) => out.extend([[x, y, o], [y, z, o], [z, x, o]]),
+                None => out.push([x, y, z]),
+            }
+            out
+        }
+        _ if m.iter().flatten().count() == 1 => {
+            // Rotated so that the split edge is (a, b).
+            let k = (0..3).find(|&k| m[k].is_some()).unwrap_or(0);
+            let (a, b, c) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
+            let x = m[k].unwrap_or(a);
+            vec![[a, x, c], [x, b, c]]
+        }
+        _ => {
+            // Rotated so that the whole edge is (b, c): a is the corner both splits share,
+            // x on (a, b), y on (c, a).
+            let k = (0..3).find(|&k| m[(k + 1) % 3].is_none()).unwrap_or(0);
+            let (a, b, c) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
+            let (x, y) = (m[k].unwrap_or(a), m[(k + 2) % 3].unwrap_or(a));
+            if dist2(x, c) <= dist2(b, y) {
+                vec![[a, x, y], [x, b, c], [x, c, y]]
+            } else {
+                vec![[a, x, y], [x, b, y], [b, c, y]]
+            }
+        }
+    }
 }
 
 #[cfg(test)]
