@@ -73,18 +73,6 @@ impl LocalFunction {
             LocalFunction::Constant(c) => (*c, Vector3::zeros()),
         }
     }
-
-    /// f(x) and grad f(x) on the side of `region` where this is a sharp function with such a
-    /// side ([`SharpFunction::side_value_and_gradient`]), else as [`Self::value_and_gradient`].
-    #[inline]
-    pub fn side_value_and_gradient(&self, region: u32, x: &Point3<f64>) -> (f64, Vector3<f64>) {
-        match self {
-            LocalFunction::Sharp(s) => s
-                .side_value_and_gradient(region, x)
-                .unwrap_or_else(|| s.value_and_gradient(x)),
-            _ => self.value_and_gradient(x),
-        }
-    }
 }
 
 /// Parameters of one domain's fit.

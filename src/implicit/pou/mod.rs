@@ -544,12 +544,49 @@ impl PouImplicit {
         out
     }
 
-    /// F and grad F on the side of `region` of every crease: sharp cells ([`super::sharp`])
-    /// contribute that region's own polynomial where they have one, so the zero set continues
-    /// the region's surface past its creases (the two surfaces whose meeting is the crease,
-    /// f_a = f_b = 0). Away from sharp cells this is [`Implicit::value_and_gradient`].
+    /// F and grad F on the side of `region` of every crease: where sharp cells
+    /// ([`super::sharp`]) with a side of that region reach x, the blend (seed 003 eq. 8) of
+    /// those sides alone, so that the zero set continues the region's own surface past its
+    /// creases (the two surfaces whose meeting is the crease, f_a = f_b = 0) without the
+    /// smooth neighbours' rounding pulling it in; elsewhere the implicit itself.
     pub fn side_value_and_gradient(&self, region: u32, x: &Point3<f64>) -> (f64, Vector3<f64>) {
-        self.blend(x, true, Some(region))
+        let cells = self.tree.payloads();
+        let (mut s, mut a) = (0.0, 0.0);
+        let (mut gs, mut ga) = (Vector3::zeros(), Vector3::zeros());
+        self.tree.for_each_support(x, |l| {
+            let c = &cells[l];
+            let LocalFunction::Sharp(sf) = &c.function else {
+                return;
+            };
+            let Some((f, gf)) = sf.side_value_and_gradient(region, x) else {
+                return;
+            };
+            let t = (x - c.center).component_mul(&c.inv_half);
+            let q = Vector3::new(1.0 - t.x * t.x, 1.0 - t.y * t.y, 1.0 - t.z * t.z);
+            if q.x <= 0.0 || q.y <= 0.0 || q.z <= 0.0 {
+                return;
+            }
+            let (w, dw) = weight(1.0 - q.x * q.y * q.z);
+            if w <= 0.0 {
+                return;
+            }
+            let ih = c.inv_half;
+            let gw = Vector3::new(
+                2.0 * t.x * ih.x * q.y * q.z,
+                2.0 * t.y * ih.y * q.x * q.z,
+                2.0 * t.z * ih.z * q.x * q.y,
+            ) * dw;
+            s += w;
+            a += w * f;
+            gs += gw;
+            ga += gw * f + gf * w;
+        });
+        if s > 0.0 {
+            let f = a / s;
+            (f, (ga - gs * f) / s)
+        } else {
+            self.blend(x, true)
+        }
     }
 
     /// Signed distance to the nearest point (sign from its normal): F outside all supports.
@@ -644,12 +681,7 @@ impl PouImplicit {
     /// so F is C2 there. Outside all supports (beyond the root cube's overlap) F is the signed
     /// distance to the nearest point.
     #[inline]
-    fn blend(
-        &self,
-        x: &Point3<f64>,
-        with_gradient: bool,
-        side: Option<u32>,
-    ) -> (f64, Vector3<f64>) {
+    fn blend(&self, x: &Point3<f64>, with_gradient: bool) -> (f64, Vector3<f64>) {
         #[derive(Default)]
         struct Acc {
             s: f64,
@@ -687,10 +719,7 @@ impl PouImplicit {
                 }
             };
             if with_gradient {
-                let (f, gf) = match side {
-                    None => c.function.value_and_gradient(x),
-                    Some(r) => c.function.side_value_and_gradient(r, x),
-                };
+                let (f, gf) = c.function.value_and_gradient(x);
                 // d d / d x_r = 2 t_r / a_r * prod_{s != r} q_s
                 let ih = c.inv_half;
                 let gd = Vector3::new(
@@ -716,10 +745,7 @@ impl PouImplicit {
                 }
             } else {
                 a.s += w;
-                a.a += w * match side {
-                    None => c.function.value(x),
-                    Some(r) => c.function.side_value_and_gradient(r, x).0,
-                };
+                a.a += w * c.function.value(x);
                 if need_cover {
                     a.c += psi(t.x).0 * psi(t.y).0 * psi(t.z).0;
                 }
@@ -769,13 +795,13 @@ impl PouImplicit {
 
 impl Implicit for PouImplicit {
     fn value(&self, x: &Point3<f64>) -> f64 {
-        self.blend(x, false, None).0
+        self.blend(x, false).0
     }
     fn gradient(&self, x: &Point3<f64>) -> Vector3<f64> {
-        self.blend(x, true, None).1
+        self.blend(x, true).1
     }
     fn value_and_gradient(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
-        self.blend(x, true, None)
+        self.blend(x, true)
     }
 }
 
