@@ -302,7 +302,17 @@ fn winding(mesh: &Mesh, op: &OrientedPoints) -> Result<f64> {
 }
 
 fn segment_faces(mesh: &Mesh, op: &OrientedPoints, opts: &MeshOptions) -> Result<Segmentation> {
-    let l = segment_mesh(mesh, opts)?;
+    let mut l = segment_mesh(mesh, opts)?;
+    // Small regions behind mild creases are surface detail, as `features` reports them
+    // (`detect`): spot's horns are no faces of their own.
+    let d = DetectOptions::default();
+    (l.regions, l.pairs) = details::absorb_details(
+        &mut l.face_label,
+        l.regions,
+        &l.pairs,
+        d.detail_fraction,
+        d.detail_deg,
+    );
     // Region normals from the faces, turned outward like the whole input's.
     let sign = winding(mesh, op)?;
     let mut regions = Vec::with_capacity(l.regions);

@@ -132,3 +132,33 @@ fn refuses_point_output_and_bad_input() {
     );
     assert!(!out.exists());
 }
+
+/// An organic model has one smooth region (its horns are surface detail), so `--sharp` leaves
+/// the output as it is, byte for byte.
+#[test]
+fn sharp_leaves_an_organic_model_as_it_is() {
+    let dir = tempfile::tempdir().unwrap();
+    let spot = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/spot.obj");
+    let mut outputs = Vec::new();
+    for extra in [&[][..], &["--sharp"][..]] {
+        let out = dir.path().join(format!("spot{}.ply", extra.len()));
+        let args = [
+            &[
+                "reconstruct",
+                spot.to_str().unwrap(),
+                "-q",
+                "-o",
+                out.to_str().unwrap(),
+            ][..],
+            extra,
+        ]
+        .concat();
+        let (code, _, err) = common::run(&args);
+        assert_eq!(code, 0, "{err}");
+        outputs.push(std::fs::read(&out).unwrap());
+    }
+    assert!(
+        outputs[0] == outputs[1],
+        "--sharp changed an organic model's mesh"
+    );
+}
