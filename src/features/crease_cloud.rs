@@ -43,7 +43,7 @@ use std::collections::{BTreeMap, BTreeSet};
 /// Fewest points of one side for its plane.
 const MIN_SIDE: usize = 5;
 
-/// Options of [`cloud_creases`], in multiples of the point spacing where they are lengths.
+/// Options of [`boundary_points`] and [`creases_from`], in multiples of the point spacing where they are lengths.
 #[derive(Debug, Clone, Copy)]
 pub struct CreaseOptions {
     /// Neighbours that make a point a boundary point (default 10).
@@ -164,20 +164,9 @@ fn side_planes(
     out
 }
 
-/// Creases and corners of a labelled cloud; `spacing` is its typical point spacing.
-pub fn cloud_creases(
-    points: &[Point3<f64>],
-    labels: &CloudLabels,
-    kd: &KdTree,
-    spacing: f64,
-    opts: &CreaseOptions,
-) -> (Vec<Crease>, Vec<Point3<f64>>) {
-    let found = boundary_points(points, labels, kd, spacing, opts);
-    creases_from(&found, spacing, opts)
-}
-
 /// Step 1 of the module doc: per point (in order), the region pair whose boundary it lies on,
-/// and the crease sample and corner candidate found there.
+/// and the crease sample and corner candidate found there; `spacing` is the cloud's typical
+/// point spacing.
 pub fn boundary_points(
     points: &[Point3<f64>],
     labels: &CloudLabels,

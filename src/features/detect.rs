@@ -10,20 +10,20 @@
 //! spacing; the mesh's are its mean edge length. One angle is fixed: regions meeting at less
 //! than [`DetectOptions::angle_deg`] (20 degrees) are one smooth region (`--angle` overrides).
 
-use super::crease_cloud::{boundary_points, creases_from, CreaseOptions};
+use super::crease_cloud::{boundary_points, creases_from, BoundaryPoint, CreaseOptions};
 use super::crease_mesh::mesh_creases;
 use super::details::absorb_details;
 use super::folds::merge_folds;
 use super::lines::Crease;
-use super::segment_cloud::{segment_cloud, CloudOptions, NONE};
-use super::segment_mesh::{segment_mesh, MeshOptions};
+use super::segment_cloud::{segment_cloud, CloudLabels, CloudOptions, NONE};
+use super::segment_mesh::{segment_mesh, MeshLabels, MeshOptions};
 use crate::implicit::noise::estimate_noise;
 use crate::mesh::normals::vertex_normals;
 use crate::mesh::{Aabb, Mesh};
 use crate::normals::{oriented_points, OrientedPoints};
 use crate::spatial::KdTree;
 use crate::{Error, Result};
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use serde::Serialize;
 
 /// Options of [`detect`].
@@ -200,13 +200,9 @@ fn detect_cloud(op: &OrientedPoints, opts: &DetectOptions) -> Result<Found> {
     };
     // No detail absorption here: a cloud's pair angles come from local fits (a chamfer's
     // 45 degrees reads 40-44), too close to an organic detail's to tell them apart.
-    let mut labels = segment_cloud(points, normals, &kd, &cloud);
-    let spacing = crate::reconstruct::mean_spacing(points, &kd);
-    let mut found = boundary_points(points, &labels, &kd, spacing, &opts.creases);
-    // Pairs that only fold in places are one surface; their samples go with them.
-    if merge_folds(points, &mut labels, &found, spacing, &opts.creases) > 0 {
-        found = boundary_points(points, &labels, &kd, spacing, &opts.creases);
-    }
+    let (labels, spacing, found) = cloud_regions(points, normals, &kd, &cloud, &opts.creases);
+    let found =
+        found.unwrap_or_else(|| boundary_points(points, &labels, &kd, spacing, &opts.creases));
     let (creases, corners) = creases_from(&found, spacing, &opts.creases);
     Ok(Found {
         method: "cloud",
@@ -218,6 +214,44 @@ fn detect_cloud(op: &OrientedPoints, opts: &DetectOptions) -> Result<Found> {
         points: points.to_vec(),
         label: labels.label,
     })
+}
+
+/// The smooth regions of a cloud ([`segment_cloud`], then [`super::folds`]), its typical
+/// spacing, and the boundary points of the regions when the folds left them as they were
+/// (`None` after a merge: the caller that needs them computes them again). One pipeline for
+/// [`detect`] and [`super::segment`].
+pub(super) fn cloud_regions(
+    points: &[Point3<f64>],
+    normals: &[Vector3<f64>],
+    kd: &KdTree,
+    cloud: &CloudOptions,
+    creases: &CreaseOptions,
+) -> (CloudLabels, f64, Option<Vec<BoundaryPoint>>) {
+    let mut labels = segment_cloud(points, normals, kd, cloud);
+    let spacing = crate::reconstruct::mean_spacing(points, kd);
+    let found = boundary_points(points, &labels, kd, spacing, creases);
+    // Pairs that only fold in places are one surface; their samples go with them.
+    let merged = merge_folds(points, &mut labels, &found, spacing, creases);
+    (labels, spacing, (merged == 0).then_some(found))
+}
+
+/// The smooth regions of a mesh's faces ([`segment_mesh`]), with the small regions behind mild
+/// creases absorbed as surface detail ([`absorb_details`], `opts.detail_fraction` and
+/// `opts.detail_deg`). One pipeline for [`detect`] and [`super::segment`].
+pub(super) fn mesh_regions(
+    input: &Mesh,
+    mesh_opts: &MeshOptions,
+    opts: &DetectOptions,
+) -> Result<MeshLabels> {
+    let mut labels = segment_mesh(input, mesh_opts)?;
+    (labels.regions, labels.pairs) = absorb_details(
+        &mut labels.face_label,
+        labels.regions,
+        &labels.pairs,
+        opts.detail_fraction,
+        opts.detail_deg,
+    );
+    Ok(labels)
 }
 
 /// What each kind of input yields, before the common figures are added.
@@ -237,14 +271,7 @@ fn detect_mesh(input: &Mesh, opts: &DetectOptions) -> Result<Found> {
         crease_deg: opts.angle_deg,
         ..opts.mesh
     };
-    let mut labels = segment_mesh(input, &mesh_opts)?;
-    (labels.regions, labels.pairs) = absorb_details(
-        &mut labels.face_label,
-        labels.regions,
-        &labels.pairs,
-        opts.detail_fraction,
-        opts.detail_deg,
-    );
+    let labels = mesh_regions(input, &mesh_opts, opts)?;
     let (creases, corners) = mesh_creases(input, &labels, opts.turn_deg)?;
     // Vertex labels: the region of a vertex's first face (a crease vertex belongs to both).
     let used = input.referenced();

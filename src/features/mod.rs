@@ -245,11 +245,8 @@ pub fn segment(input: &Mesh, op: &OrientedPoints, opts: &FeatureOptions) -> Resu
 
 fn segment_points(op: &OrientedPoints, opts: &CloudOptions) -> Result<Segmentation> {
     let kd = KdTree::build(&op.points)?;
-    let mut l = segment_cloud(&op.points, &op.normals, &kd, opts);
-    let spacing = crate::reconstruct::mean_spacing(&op.points, &kd);
     let creases = crease_cloud::CreaseOptions::default();
-    let found = crease_cloud::boundary_points(&op.points, &l, &kd, spacing, &creases);
-    folds::merge_folds(&op.points, &mut l, &found, spacing, &creases);
+    let (l, _, _) = detect::cloud_regions(&op.points, &op.normals, &kd, opts, &creases);
     let mut regions = vec![Region::default(); l.regions];
     let mut label_points = Vec::with_capacity(op.points.len());
     let mut label_of = Vec::with_capacity(op.points.len());
@@ -302,17 +299,9 @@ fn winding(mesh: &Mesh, op: &OrientedPoints) -> Result<f64> {
 }
 
 fn segment_faces(mesh: &Mesh, op: &OrientedPoints, opts: &MeshOptions) -> Result<Segmentation> {
-    let mut l = segment_mesh(mesh, opts)?;
-    // Small regions behind mild creases are surface detail, as `features` reports them
-    // (`detect`): spot's horns are no faces of their own.
-    let d = DetectOptions::default();
-    (l.regions, l.pairs) = details::absorb_details(
-        &mut l.face_label,
-        l.regions,
-        &l.pairs,
-        d.detail_fraction,
-        d.detail_deg,
-    );
+    // Small regions behind mild creases are surface detail, as `features` reports them:
+    // spot's horns are no faces of their own.
+    let l = detect::mesh_regions(mesh, opts, &DetectOptions::default())?;
     // Region normals from the faces, turned outward like the whole input's.
     let sign = winding(mesh, op)?;
     let mut regions = Vec::with_capacity(l.regions);

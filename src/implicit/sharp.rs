@@ -106,12 +106,6 @@ impl SharpFunction {
         (self.outer, self.inner)
     }
 
-    /// The side that gives F at `x`.
-    pub fn active(&self, x: &Point3<f64>) -> usize {
-        let v: Vec<f64> = self.sides.iter().map(|s| s.poly.value(x)).collect();
-        self.pick(&v).1
-    }
-
     /// F and which side gives it, from the sides' values.
     #[inline]
     fn pick(&self, v: &[f64]) -> (f64, usize) {

@@ -34,7 +34,7 @@
 use crate::mesh::Mesh;
 use nalgebra::{Matrix2, Matrix3, Point3, Vector2, Vector3};
 use rayon::prelude::*;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// What the splitting needs to know of the surface.
 pub trait SideField: Sync {
@@ -141,16 +141,15 @@ pub fn split_at_creases(
     let label: Vec<u32> = mesh.positions.par_iter().map(|p| field.region(p)).collect();
     // Crossing edges, each once, in the order of the faces.
     let mut crossing: Vec<(u32, u32)> = Vec::new();
-    let mut seen: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut seen: HashSet<(u32, u32)> = HashSet::new();
     for f in &mesh.faces {
         for k in 0..3 {
             let (a, b) = (f[k], f[(k + 1) % 3]);
             if label[a as usize] != label[b as usize] {
-                let key = (a.min(b), a.max(b));
-                seen.entry(key).or_insert_with(|| {
+                let key = edge_key(a, b);
+                if seen.insert(key) {
                     crossing.push(key);
-                    crossing.len() - 1
-                });
+                }
             }
         }
     }
@@ -356,53 +355,16 @@ mod tests {
         }
     }
 
-    /// A sphere of radius sqrt(3) projected onto the cube: every vertex on a face, triangles
-    /// cutting the edges and corners (a marching-cubes mesh of a cube looks like this).
-    fn rounded_cube(n: usize) -> Mesh {
-        let mut m = crate::mesh::Mesh::default();
-        // An octahedron subdivided n times, pushed onto the cube along rays.
-        let mut pos = vec![
-            Point3::new(1.0, 0.0, 0.0),
-            Point3::new(-1.0, 0.0, 0.0),
-            Point3::new(0.0, 1.0, 0.0),
-            Point3::new(0.0, -1.0, 0.0),
-            Point3::new(0.0, 0.0, 1.0),
-            Point3::new(0.0, 0.0, -1.0),
-        ];
-        let mut faces: Vec<[u32; 3]> = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
-        for _ in 0..n {
-            let mut mids: HashMap<(u32, u32), u32> = HashMap::new();
-            let mut out = Vec::new();
-            for f in &faces {
-                let mut mid = |a: u32, b: u32| {
-                    *mids.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                        let p =
-                            Point3::from((pos[a as usize].coords + pos[b as usize].coords) * 0.5);
-                        pos.push(Point3::from(p.coords.normalize()));
-                        pos.len() as u32 - 1
-                    })
-                };
-                let (x, y, z) = (mid(f[0], f[1]), mid(f[1], f[2]), mid(f[2], f[0]));
-                out.extend([[f[0], x, z], [x, f[1], y], [z, y, f[2]], [x, y, z]]);
-            }
-            faces = out;
-        }
-        // Rays onto the cube, nudged off the exact edges so that every vertex has one face.
-        for p in pos.iter_mut() {
+    /// A subdivided icosahedron ([`crate::smooth::testing::sphere`]) pushed onto the cube along
+    /// rays: every vertex on a face, triangles cutting the edges and corners (a marching-cubes
+    /// mesh of a cube looks like this).
+    fn rounded_cube(levels: u32) -> Mesh {
+        let mut m = crate::smooth::testing::sphere(levels);
+        // Rays nudged off the exact edges so that every vertex has one face.
+        for p in m.positions.iter_mut() {
             let d = Vector3::new(p.x + 1e-3, p.y + 2e-3, p.z + 3e-3);
             *p = Point3::from(d / d.abs().max());
         }
-        m.positions = pos;
-        m.faces = faces;
         m
     }
 
@@ -420,8 +382,6 @@ mod tests {
         assert!(Topology::build(&mesh).is_closed_manifold());
         // Every new vertex on an edge of the cube (two coordinates at +-1), the corners on
         // corners.
-        let old = before.edges.len();
-        let _ = old;
         let on_edges = mesh
             .positions
             .iter()
