@@ -202,6 +202,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         apron_unit: (extend_surfaces == ExtendSurfaces::Auto).then_some(unit),
         features: a.features.then(crate::features::DetectOptions::default),
         close,
+        size_given: a.patches.is_some() || a.patch_size.is_some(),
         ..FitOptions::default()
     };
     opts.implicit.tolerance = a.fit_tolerance;
@@ -264,6 +265,20 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     let support = &report.support;
     if !quiet && report.close.requested == crate::openings::Close::Auto {
         eprintln!("close: {}", report.close.reason);
+    }
+    if let Some(c) = report
+        .close
+        .coverage
+        .as_ref()
+        .filter(|c| !c.note.is_empty())
+    {
+        // Parts left unfitted are a warning; a finer net made for them is said unless quiet
+        // (the patch count then differs from the default).
+        if !c.covered {
+            eprintln!("warning: {}", c.note);
+        } else if !quiet {
+            eprintln!("close: {}", c.note);
+        }
     }
     if support.unsupported_fraction > UNSUPPORTED_WARNING {
         eprintln!(

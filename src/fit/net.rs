@@ -4,6 +4,7 @@
 
 use crate::implicit::Implicit;
 use crate::mesh::Aabb;
+use crate::openings::coverage::{self, CoverageReport, CoverageRound};
 use crate::openings::{fit_rim, net_support, trim_to_data, Close, RimReport, TrimReport};
 use crate::polygonize::net_smooth::{project_and_smooth, SmoothOptions, SmoothReport};
 use crate::polygonize::patch_count::{
@@ -55,6 +56,9 @@ pub struct NetReport {
     pub trim: Option<TrimReport>,
     #[serde(skip)]
     pub rim: Option<RimReport>,
+    /// The kept placement's trial score (also in `placements`).
+    #[serde(skip)]
+    pub kept_trial: Option<TrialScore>,
 }
 
 /// One placement of the voxel grid tried by [`fit_net`].
@@ -74,10 +78,13 @@ pub struct PlacementTry {
 
 /// How a placement's net does as patches, measured by the caller of [`fit_net`] on trial
 /// patches (cheap ones: few samples per side, no refinement).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct TrialScore {
     /// Edge samples whose normal jump exceeds 5 degrees.
     pub samples_over_5_deg: usize,
+    /// Share of the trial patches' area farther than 1 % of the diagonal from the data (the
+    /// report's `support_far` on these quick patches; [`fit_open_net`] refines on it).
+    pub far_share: f64,
 }
 
 /// Net edges whose two end nodes have opposed unit normals of f: the net crosses a sheet
@@ -184,6 +191,7 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
         Option<P>,
         Option<TrimReport>,
         Option<RimReport>,
+        Option<TrialScore>,
     );
     let mut best: Option<Best<P>> = None;
     for (k, frac) in [0.0, 1.0 / 3.0, 2.0 / 3.0].into_iter().enumerate() {
@@ -249,7 +257,13 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
         let crossing = crossing_edges(f, &net);
         // Folds first; then the trial patches' large jumps (when the caller measures them),
         // then edges crossing a thin sheet.
-        let (trial, kept) = match if folds == 0 { score_net(&net) } else { None } {
+        // An open net is measured even with folds: its trial patches show where the net
+        // spans what it cannot resolve ([`fit_open_net`]).
+        let (trial, kept) = match if folds == 0 || open {
+            score_net(&net)
+        } else {
+            None
+        } {
             Some((t, k)) => (Some(t), Some(k)),
             None => (None, None),
         };
@@ -262,10 +276,10 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
             trial,
         });
         if best.as_ref().is_none_or(|b| score < b.0) {
-            best = Some((score, net, smoothing, stats, kept, trim, rim));
+            best = Some((score, net, smoothing, stats, kept, trim, rim, trial));
         }
     }
-    let Some((_, net, smoothing, voxel_stats, kept, trim, rim)) = best else {
+    let Some((_, net, smoothing, voxel_stats, kept, trim, rim, kept_trial)) = best else {
         let why = first_error.map_or_else(String::new, |e| format!(" ({e})"));
         return Err(Error::Numerical(format!(
             "the quad net could not be projected onto the implicit surface{why}: parts of the \
@@ -279,6 +293,7 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
         unsupported_share,
         trim,
         rim,
+        kept_trial,
         h,
         patches: net.quads.len(),
         nodes: net.nodes.len(),
@@ -292,6 +307,74 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
         smoothing,
     };
     Ok((net, report, kept))
+}
+
+/// [`fit_net`] with `Close::Open`, and the coverage check of [`crate::openings::coverage`]:
+/// when the net misses more than its share of `seeds`, or its trial patches (the kept
+/// placement's [`TrialScore::far_share`], from `score_net`) lie too far from the data, and `size_given`
+/// is false (the patch count is `fit`'s default), the net is built again with twice the
+/// patches, at most [`coverage::MAX_DOUBLINGS`] times. Returns the kept net (the first that
+/// passes, else the one that misses the fewest points) and what was tried. Errors: those of
+/// the first [`fit_net`]; a later round that fails ends the refinement with the nets made.
+#[allow(clippy::type_complexity)]
+pub fn fit_open_net<I: Implicit + ?Sized, P>(
+    f: &I,
+    seeds: &[Point3<f64>],
+    data: &KdTree,
+    bounds: &Aabb,
+    size: PatchSize,
+    size_given: bool,
+    score_net: &(dyn Fn(&QuadNet) -> Option<(TrialScore, P)> + Sync),
+) -> Result<(QuadNet, NetReport, Option<P>, CoverageReport)> {
+    let mut rep = CoverageReport::default();
+    let mut best: Option<((bool, f64), QuadNet, NetReport, Option<P>)> = None;
+    let mut size = size;
+    let mut failed = None;
+    for round in 0..=coverage::MAX_DOUBLINGS {
+        let (net, report, kept) =
+            match fit_net(f, seeds, data, bounds, size, Close::Open, score_net) {
+                Ok(built) => built,
+                Err(e) if round > 0 => {
+                    failed = Some(e);
+                    break;
+                }
+                Err(e) => return Err(e),
+            };
+        let missed = coverage::missed_share(&net, seeds, report.h);
+        let far = report.kept_trial.map(|t| t.far_share);
+        rep.rounds.push(CoverageRound {
+            patches_requested: match size {
+                PatchSize::Count(n) => n,
+                PatchSize::Edge(_) => report.patches,
+            },
+            patches: report.patches,
+            h: report.h,
+            missed_share: missed,
+            far_share: far,
+        });
+        let fine = !coverage::needs_refinement(missed, far);
+        let score = (fine, -missed);
+        if best.as_ref().is_none_or(|b| score > b.0) {
+            best = Some((score, net, report, kept));
+            rep.kept = round;
+        }
+        match size {
+            _ if fine => break,
+            PatchSize::Count(n) if !size_given && round < coverage::MAX_DOUBLINGS => {
+                size = PatchSize::Count(2 * n)
+            }
+            _ => break,
+        }
+    }
+    let Some((_, net, report, kept)) = best else {
+        return Err(failed.unwrap_or_else(|| Error::Degenerate("no quad net was built".into())));
+    };
+    let hint = match size {
+        PatchSize::Count(n) => format!("--patches {}", 2 * n),
+        PatchSize::Edge(l) => format!("--patch-size {:.4}", l / std::f64::consts::SQRT_2),
+    };
+    rep.conclude(&hint, failed.as_ref());
+    Ok((net, report, kept, rep))
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 //! patches by point inversion, normal jump across shared edges, quad quality, timings.
 
 use super::cross_tangents::{align_cross_derivatives, corner_twists, BoundarySplines};
-use super::net::{fit_net, NetReport, PatchSize, TrialScore};
+use super::net::{fit_net, fit_open_net, NetReport, PatchSize, TrialScore};
 use super::samples::{
     sample_patches, sample_patches_from, PatchSampling, SampleOptions, SampleReport,
 };
@@ -52,6 +52,10 @@ pub struct FitOptions {
     /// What to do with the openings of the data (`--close`, default `auto`;
     /// [`crate::openings`]).
     pub close: crate::openings::Close,
+    /// Whether the user gave the patch count or size (`--patches`, `--patch-size`). When not,
+    /// an open fit whose net misses parts of the data thinner than a patch is made again with
+    /// more patches ([`crate::openings::coverage`]); when given, the report only says so.
+    pub size_given: bool,
 }
 
 /// Most sample intervals per patch side when the STEP writer extends the patches' surfaces:
@@ -74,6 +78,7 @@ impl Default for FitOptions {
             apron_unit: Some(crate::export::LengthUnit::Millimetre),
             features: None,
             close: crate::openings::Close::Auto,
+            size_given: false,
         }
     }
 }
@@ -218,20 +223,37 @@ pub fn fit_measured(
         let sampling = sample_patches(net, &f, &o).ok()?;
         let network = patch_network(&f, net, &sampling).ok()?;
         let c = normal_jumps(&network, opts.jump_samples);
+        let grids: Vec<_> = sampling.patches.iter().map(|p| &p.points).collect();
+        let [far] = surface_support_at(&grids, &data, [0.01 * diag]);
         let score = TrialScore {
             samples_over_5_deg: c.samples_over_5_deg,
+            far_share: far.unsupported_fraction,
         };
         Some((score, sampling))
     };
-    let (net, net_report, trial_sampling) = fit_net(
-        &f,
-        &op.points,
-        &data,
-        &bounds,
-        opts.size,
-        closure.chosen,
-        &trial,
-    )?;
+    let (net, net_report, trial_sampling) = if open {
+        let (net, report, kept, coverage) = fit_open_net(
+            &f,
+            &op.points,
+            &data,
+            &bounds,
+            opts.size,
+            opts.size_given,
+            &trial,
+        )?;
+        closure.coverage = Some(coverage);
+        (net, report, kept)
+    } else {
+        fit_net(
+            &f,
+            &op.points,
+            &data,
+            &bounds,
+            opts.size,
+            closure.chosen,
+            &trial,
+        )?
+    };
     timings.net = t.elapsed().as_secs_f64();
     closure.unsupported_share = net_report.unsupported_share;
     closure.support_radius = crate::openings::SUPPORT_RADIUS * net_report.h;

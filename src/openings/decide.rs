@@ -43,6 +43,9 @@ pub struct ClosureReport {
     /// The rim carried to the data's edge (`open` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rim: Option<super::RimReport>,
+    /// How much of the data the net covers, and the refinement it took (`open` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coverage: Option<super::coverage::CoverageReport>,
 }
 
 /// Decides `requested` from the ray test; the support fields are filled in by the net stage.
@@ -79,6 +82,7 @@ pub fn choose(requested: Close, enclosure: Enclosure) -> ClosureReport {
         reason,
         trim: None,
         rim: None,
+        coverage: None,
     }
 }
 

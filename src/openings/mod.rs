@@ -16,6 +16,7 @@
 //! implicit does not bridge openings ([`crate::implicit::pou::FitOptions::bridge_openings`]):
 //! what it would put there is cut away, and bridging a whole missing side is slow.
 
+pub mod coverage;
 pub mod decide;
 pub mod enclosure;
 pub mod rim;

@@ -208,6 +208,38 @@ pub fn shared_model(name: &str) -> Option<PathBuf> {
     }
 }
 
+/// Runs the part generator `script` (make_parts.py, or scripts/extra_parts.py which uses it)
+/// with the checker's `py` into a scratch directory `name` for `parts`; the directory.
+fn make_with(py: &Path, script: &Path, name: &str, parts: &str) -> PathBuf {
+    let dir = scratch_dir(name);
+    let o = std::process::Command::new(py)
+        .arg(script)
+        .arg(&dir)
+        .args(["--parts", parts])
+        .output()
+        .expect("run the part generator");
+    assert!(
+        o.status.success(),
+        "{}: {}",
+        script.display(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    dir
+}
+
+/// `scripts/extra_parts.py`'s stepped shaft (a turned part lying along x: seen from above, the
+/// lower halves of its shoulders are thin one-sided crescents), made once per test run, as
+/// make_parts writes its parts; `None` outside CI when the tools or the venv are missing.
+pub fn stepped_part() -> Option<&'static PathBuf> {
+    static PART: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
+    let (py, _) = checker()?;
+    make_parts()?;
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/extra_parts.py");
+    Some(shared(&PART, || {
+        make_with(&py, &script, "extra_parts_stepped", "stepped")
+    }))
+}
+
 /// make_parts' block and bracket (200,000 points, noise 0.01 mm; each as NAME.step, the exact
 /// truth, NAME.stl, NAME.xyz and NAME-occluded.xyz, seen from above), made once per test run;
 /// `None` outside CI when the tools or the checker's venv are missing.
@@ -223,18 +255,11 @@ pub fn make_parts() -> Option<&'static PathBuf> {
         return None;
     };
     Some(shared(&PARTS, || {
-        let dir = scratch_dir("make_parts");
-        let o = std::process::Command::new(&py)
-            .arg(tools.join("make_parts.py"))
-            .arg(&dir)
-            .args(["--parts", "block,bracket"])
-            .output()
-            .expect("run make_parts.py");
-        assert!(
-            o.status.success(),
-            "make_parts.py: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        dir
+        make_with(
+            &py,
+            &tools.join("make_parts.py"),
+            "make_parts",
+            "block,bracket",
+        )
     }))
 }
