@@ -313,7 +313,8 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
 /// when the net misses more than its share of `seeds`, or its trial patches (the kept
 /// placement's [`TrialScore::far_share`], from `score_net`) lie too far from the data, and `size_given`
 /// is false (the patch count is `fit`'s default), the net is built again with twice the
-/// patches, at most [`coverage::MAX_DOUBLINGS`] times. Returns the kept net (the first that
+/// patches, at most [`coverage::MAX_DOUBLINGS`] times and while there are
+/// [`coverage::MIN_POINTS_PER_PATCH`] points per patch. Returns the kept net (the first that
 /// passes, else the one that misses the fewest points) and what was tried. Errors: those of
 /// the first [`fit_net`]; a later round that fails ends the refinement with the nets made.
 #[allow(clippy::type_complexity)]
@@ -330,6 +331,8 @@ pub fn fit_open_net<I: Implicit + ?Sized, P>(
     let mut best: Option<((bool, f64), QuadNet, NetReport, Option<P>)> = None;
     let mut size = size;
     let mut failed = None;
+    // What the user can do when the kept net does not pass (empty: nothing more).
+    let mut remedy = String::new();
     for round in 0..=coverage::MAX_DOUBLINGS {
         let (net, report, kept) =
             match fit_net(f, seeds, data, bounds, size, Close::Open, score_net) {
@@ -361,7 +364,24 @@ pub fn fit_open_net<I: Implicit + ?Sized, P>(
         match size {
             _ if fine => break,
             PatchSize::Count(n) if !size_given && round < coverage::MAX_DOUBLINGS => {
+                if seeds.len() < coverage::MIN_POINTS_PER_PATCH * 2 * n {
+                    remedy = format!(
+                        "the {} points are too few for a finer net ({} per patch)",
+                        seeds.len(),
+                        coverage::MIN_POINTS_PER_PATCH
+                    );
+                    break;
+                }
                 size = PatchSize::Count(2 * n)
+            }
+            PatchSize::Count(n) if size_given => {
+                remedy = format!("--patches {} makes a finer one", 2 * n);
+                break;
+            }
+            PatchSize::Edge(l) => {
+                let l = l / std::f64::consts::SQRT_2;
+                remedy = format!("--patch-size {l:.4} makes a finer one");
+                break;
             }
             _ => break,
         }
@@ -369,11 +389,7 @@ pub fn fit_open_net<I: Implicit + ?Sized, P>(
     let Some((_, net, report, kept)) = best else {
         return Err(failed.unwrap_or_else(|| Error::Degenerate("no quad net was built".into())));
     };
-    let hint = match size {
-        PatchSize::Count(n) => format!("--patches {}", 2 * n),
-        PatchSize::Edge(l) => format!("--patch-size {:.4}", l / std::f64::consts::SQRT_2),
-    };
-    rep.conclude(&hint, failed.as_ref());
+    rep.conclude(&remedy, failed.as_ref());
     Ok((net, report, kept, rep))
 }
 
