@@ -311,9 +311,9 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
 
 /// [`fit_net`] with `Close::Open`, and the coverage check of [`crate::openings::coverage`]:
 /// when the net misses more than its share of `seeds`, or its trial patches (the kept
-/// placement's [`TrialScore::far_share`], from `score_net`) lie too far from the data, and `size_given`
-/// is false (the patch count is `fit`'s default), the net is built again with twice the
-/// patches, at most [`coverage::MAX_DOUBLINGS`] times and while there are
+/// placement's [`TrialScore::far_share`], from `score_net`) lie too far from the data, and
+/// `size_given` is false (the patch count is `fit`'s default), the net is built again with
+/// twice the patches, at most [`coverage::MAX_DOUBLINGS`] times and while there are
 /// [`coverage::MIN_POINTS_PER_PATCH`] points per patch. Returns the kept net (the first that
 /// passes, else the one that misses the fewest points) and what was tried. Errors: those of
 /// the first [`fit_net`]; a later round that fails ends the refinement with the nets made.
