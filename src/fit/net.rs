@@ -317,7 +317,6 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
 /// [`coverage::MIN_POINTS_PER_PATCH`] points per patch. Returns the kept net (the first that
 /// passes, else the one that misses the fewest points) and what was tried. Errors: those of
 /// the first [`fit_net`]; a later round that fails ends the refinement with the nets made.
-#[allow(clippy::type_complexity)]
 pub fn fit_open_net<I: Implicit + ?Sized, P>(
     f: &I,
     seeds: &[Point3<f64>],
@@ -328,7 +327,8 @@ pub fn fit_open_net<I: Implicit + ?Sized, P>(
     score_net: &(dyn Fn(&QuadNet) -> Option<(TrialScore, P)> + Sync),
 ) -> Result<(QuadNet, NetReport, Option<P>, CoverageReport)> {
     let mut rep = CoverageReport::default();
-    let mut best: Option<((bool, f64), QuadNet, NetReport, Option<P>)> = None;
+    // The kept round's net; its figures are `rep.rounds[rep.kept]`.
+    let mut best: Option<(QuadNet, NetReport, Option<P>)> = None;
     let mut size = size;
     let mut failed = None;
     // What the user can do when the kept net does not pass (empty: nothing more).
@@ -356,9 +356,14 @@ pub fn fit_open_net<I: Implicit + ?Sized, P>(
             far_share: far,
         });
         let fine = !coverage::needs_refinement(missed, far);
-        let score = (fine, -missed);
-        if best.as_ref().is_none_or(|b| score > b.0) {
-            best = Some((score, net, report, kept));
+        // Better: passes where the kept one does not, else misses fewer points.
+        let better = best.is_none() || {
+            let k = &rep.rounds[rep.kept];
+            let kept_fine = !coverage::needs_refinement(k.missed_share, k.far_share);
+            (fine, -missed) > (kept_fine, -k.missed_share)
+        };
+        if better {
+            best = Some((net, report, kept));
             rep.kept = round;
         }
         match size {
@@ -386,7 +391,7 @@ pub fn fit_open_net<I: Implicit + ?Sized, P>(
             _ => break,
         }
     }
-    let Some((_, net, report, kept)) = best else {
+    let Some((net, report, kept)) = best else {
         return Err(failed.unwrap_or_else(|| Error::Degenerate("no quad net was built".into())));
     };
     rep.conclude(&remedy, failed.as_ref());

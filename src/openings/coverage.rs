@@ -17,11 +17,18 @@
 //! net does not reach. The missed share is measured on at most [`SAMPLE`] points, evenly spread
 //! through the input order.
 //!
-//! **Refinement.** When `fit` chose the patch count itself (no `--patches` or `--patch-size`)
-//! and the open net misses more than [`MISS_SHARE`] of the points, the net is built again with
-//! twice the patches (voxels 1/sqrt 2 the size), at most [`MAX_DOUBLINGS`] times; the first net
-//! under the bar is kept, or else the one that misses the fewest. With a size given, the report
-//! says what the net misses and which `--patches` would follow it.
+//! **Far area.** A net that folds through a part it cannot resolve (a hole a few voxels wide
+//! where it cuts a crease) covers the points but spans the gap: the quick trial patches that
+//! rank the grid placements then have area farther than 1 % of the diagonal from the data
+//! ([`crate::fit::net::TrialScore::far_share`], the report's `support_far` on those patches).
+//!
+//! **Refinement** ([`crate::fit::net::fit_open_net`]). When `fit` chose the patch count itself
+//! (no `--patches` or `--patch-size`) and the open net misses more than [`MISS_SHARE`] of the
+//! points or its trial patches have more than [`FAR_SHARE`] of their area far from the data,
+//! the net is built again with twice the patches (voxels 1/sqrt 2 the size), at most
+//! [`MAX_DOUBLINGS`] times and only with [`MIN_POINTS_PER_PATCH`] points per patch; the first
+//! net that passes is kept, or else the one that misses the fewest points. With a size given,
+//! the report says what is wrong and which `--patches` would make a finer net.
 
 use crate::metrics::deviation::closest_point_on_triangle;
 use crate::polygonize::QuadNet;
@@ -69,9 +76,10 @@ pub struct CoverageReport {
     /// Every net built, in order; the kept one is `kept`.
     pub rounds: Vec<CoverageRound>,
     pub kept: usize,
-    /// Whether the kept net misses at most [`MISS_SHARE`] of the points.
+    /// Whether the kept net passes both bars: at most [`MISS_SHARE`] of the points missed and
+    /// at most [`FAR_SHARE`] of its trial patches' area far from the data.
     pub covered: bool,
-    /// What happened, in words (empty when the first net covered the data).
+    /// What happened, in words (empty when the first net passed).
     pub note: String,
 }
 

@@ -170,17 +170,19 @@ fn slow_parts_thinner_than_a_patch_get_smaller_patches() {
     let far = f(&r, &["support_far", "unsupported_fraction"]);
     assert!(far < 2e-3, "{}", r["support_far"]);
 
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_scansurf"))
-        .arg("fit")
-        .arg(&input)
-        .arg("-o")
-        .arg(out.path().join("b.step"))
-        .args(["-q", "--patches", "1500", "--report"])
-        .arg(out.path().join("b.json"))
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let stderr = String::from_utf8_lossy(&o.stderr);
+    let (b_step, b_json) = (out.path().join("b.step"), out.path().join("b.json"));
+    let (code, _, stderr) = common::run(&[
+        "fit",
+        input.to_str().unwrap(),
+        "-o",
+        b_step.to_str().unwrap(),
+        "-q",
+        "--patches",
+        "1500",
+        "--report",
+        b_json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
     assert!(
         stderr.contains("warning: the net of")
             && stderr.contains("misses")
@@ -188,7 +190,7 @@ fn slow_parts_thinner_than_a_patch_get_smaller_patches() {
         "{stderr}"
     );
     let b: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.path().join("b.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(&b_json).unwrap()).unwrap();
     assert_eq!(
         b["close"]["coverage"]["rounds"].as_array().unwrap().len(),
         1
