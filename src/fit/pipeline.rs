@@ -199,9 +199,12 @@ pub fn fit_measured(
 
     progress("implicit", 0.05);
     let t = Instant::now();
-    let mut implicit_opts = opts.implicit.clone();
-    implicit_opts.bridge_openings &= !open;
-    let f = PouImplicit::fit(&op.points, &op.normals, &implicit_opts)?;
+    let fit_implicit = |open: bool| {
+        let mut implicit_opts = opts.implicit.clone();
+        implicit_opts.bridge_openings &= !open;
+        PouImplicit::fit(&op.points, &op.normals, &implicit_opts)
+    };
+    let f = fit_implicit(open)?;
     timings.implicit = t.elapsed().as_secs_f64();
     let diag = f.diagonal();
     let bounds = Aabb::of(&op.points).ok_or_else(|| Error::Degenerate("no points".into()))?;
@@ -215,45 +218,96 @@ pub fn fit_measured(
     // refinement, its jumps over 5 degrees counted. The kept placement's trial sampling is the
     // first round of the real sampling.
     let tol = opts.tolerance * diag;
-    let trial = |net: &QuadNet| -> Option<(TrialScore, PatchSampling)> {
-        let mut o = SampleOptions::new(tol, diag);
-        (o.min_intervals, o.max_intervals, o.max_rounds) = (TRIAL_INTERVALS, TRIAL_INTERVALS, 1);
-        // Only the kept placement's patches are measured, when the sampling starts from them.
-        o.measure = false;
-        let sampling = sample_patches(net, &f, &o).ok()?;
-        let network = patch_network(&f, net, &sampling).ok()?;
-        let c = normal_jumps(&network, opts.jump_samples);
-        let grids: Vec<_> = sampling.patches.iter().map(|p| &p.points).collect();
-        let [far] = surface_support_at(&grids, &data, [0.01 * diag]);
-        let score = TrialScore {
-            samples_over_5_deg: c.samples_over_5_deg,
-            far_share: far.unsupported_fraction,
+    let build_net = |f: &PouImplicit, close: crate::openings::Close| {
+        let trial = |net: &QuadNet| -> Option<(TrialScore, PatchSampling)> {
+            let mut o = SampleOptions::new(tol, diag);
+            (o.min_intervals, o.max_intervals, o.max_rounds) =
+                (TRIAL_INTERVALS, TRIAL_INTERVALS, 1);
+            // Only the kept placement's patches are measured, when the sampling starts from
+            // them.
+            o.measure = false;
+            let sampling = sample_patches(net, f, &o).ok()?;
+            let network = patch_network(f, net, &sampling).ok()?;
+            let c = normal_jumps(&network, opts.jump_samples);
+            let grids: Vec<_> = sampling.patches.iter().map(|p| &p.points).collect();
+            let [far] = surface_support_at(&grids, &data, [0.01 * diag]);
+            let score = TrialScore {
+                samples_over_5_deg: c.samples_over_5_deg,
+                far_share: far.unsupported_fraction,
+            };
+            Some((score, sampling))
         };
-        Some((score, sampling))
+        if close == crate::openings::Close::Open {
+            let (net, report, kept, coverage) = fit_open_net(
+                f,
+                &op.points,
+                &data,
+                &bounds,
+                opts.size,
+                opts.size_given,
+                &trial,
+            )?;
+            Ok((net, report, kept, Some(coverage)))
+        } else {
+            let (net, report, kept) =
+                fit_net(f, &op.points, &data, &bounds, opts.size, close, &trial)?;
+            Ok::<_, Error>((net, report, kept, None))
+        }
     };
-    let (net, net_report, trial_sampling) = if open {
-        let (net, report, kept, coverage) = fit_open_net(
-            &f,
-            &op.points,
-            &data,
-            &bounds,
-            opts.size,
-            opts.size_given,
-            &trial,
-        )?;
-        closure.coverage = Some(coverage);
-        (net, report, kept)
-    } else {
-        fit_net(
-            &f,
-            &op.points,
-            &data,
-            &bounds,
-            opts.size,
-            closure.chosen,
-            &trial,
-        )?
+    let first = build_net(&f, closure.chosen);
+    // `auto` closed a surface the data do not back, or could not build the closed net: fitted
+    // again, open. When that fails too, the closed result (with its warning) or its error
+    // stands.
+    let because = match &first {
+        Ok(b) if b.1.unsupported_share > crate::openings::CLOSED_UNSUPPORTED => Some(format!(
+            "{:.1} % of the closed surface has no point within a voxel (more than {:.0} %: \
+             parts thinner than the sampling resolves, which the implicit closes away from the \
+             data)",
+            100.0 * b.1.unsupported_share,
+            100.0 * crate::openings::CLOSED_UNSUPPORTED
+        )),
+        Ok(_) => None,
+        // The error's first clause ("the quad net could not be projected onto the implicit
+        // surface"); the whole message is returned if the open fit fails too.
+        Err(e) => Some(format!(
+            "the closed surface could not be made ({})",
+            e.to_string()
+                .split([':', '('])
+                .next()
+                .unwrap_or_default()
+                .trim()
+        )),
     };
+    let mut reopened = closure.clone();
+    let (f, (net, net_report, trial_sampling, coverage)) = match because {
+        Some(because) if reopened.reopen(&because) => {
+            progress("implicit", 0.05);
+            let t_reopen = Instant::now();
+            let open_fit = fit_implicit(true).and_then(|f| {
+                timings.implicit += t_reopen.elapsed().as_secs_f64();
+                progress("quad net", 0.3);
+                let built = build_net(&f, reopened.chosen)?;
+                Ok((f, built))
+            });
+            match (open_fit, first) {
+                (Ok(done), _) => {
+                    closure = reopened;
+                    done
+                }
+                (Err(e), Ok(built)) => {
+                    closure.reason = format!(
+                        "{}; {because}, but fitting only the scanned surface failed ({e}), so \
+                         the closed surface is kept",
+                        closure.reason
+                    );
+                    (f, built)
+                }
+                (Err(_), Err(e)) => return Err(e),
+            }
+        }
+        _ => (f, first?),
+    };
+    closure.coverage = coverage;
     timings.net = t.elapsed().as_secs_f64();
     closure.unsupported_share = net_report.unsupported_share;
     closure.support_radius = crate::openings::SUPPORT_RADIUS * net_report.h;

@@ -86,6 +86,23 @@ pub fn choose(requested: Close, enclosure: Enclosure) -> ClosureReport {
     }
 }
 
+impl ClosureReport {
+    /// `auto` chose `smooth`, but the closed surface does not follow the data (`because`
+    /// says how: more than [`super::CLOSED_UNSUPPORTED`] of it unsupported, or its net failed):
+    /// the fit goes on open. True when the report changed (only `auto` and `smooth` do).
+    pub fn reopen(&mut self, because: &str) -> bool {
+        if self.requested != Close::Auto || self.chosen != Close::Smooth {
+            return false;
+        }
+        self.chosen = Close::Open;
+        self.reason = format!(
+            "{}; but {because}, so only the scanned surface is fitted",
+            self.reason
+        );
+        true
+    }
+}
+
 /// Per quad of `net`: all four nodes have an input point within `radius`.
 pub fn quads_near_data(net: &QuadNet, data: &KdTree, radius: f64) -> Vec<bool> {
     let nodes: Vec<bool> = net
@@ -105,4 +122,35 @@ pub fn net_support(net: &QuadNet, data: &KdTree, h: f64) -> (Vec<bool>, f64) {
     let quads = quads_near_data(net, data, super::SUPPORT_RADIUS * h);
     let unsupported = quads.iter().filter(|&&s| !s).count();
     (quads, unsupported as f64 / net.quads.len().max(1) as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn enclosed() -> Enclosure {
+        Enclosure {
+            rays: 1000,
+            escaped: 2,
+            escape_share: 0.002,
+        }
+    }
+
+    #[test]
+    fn only_auto_smooth_reopens() {
+        let mut auto = choose(Close::Auto, enclosed());
+        assert_eq!(auto.chosen, Close::Smooth);
+        assert!(auto.reopen("10.4 % of the closed surface has no point within a voxel"));
+        assert_eq!(auto.chosen, Close::Open);
+        assert!(auto.reason.contains("enclose a volume"), "{}", auto.reason);
+        assert!(auto
+            .reason
+            .ends_with("so only the scanned surface is fitted"));
+        // Already open, or smooth as asked: nothing changes.
+        assert!(!auto.reopen("again"));
+        let mut smooth = choose(Close::Smooth, enclosed());
+        let before = smooth.clone();
+        assert!(!smooth.reopen("anything"));
+        assert_eq!(smooth, before);
+    }
 }

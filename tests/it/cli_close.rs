@@ -1,8 +1,9 @@
 //! `scansurf fit --close`: partial scans (issue 34). A machined part scanned from above
 //! (make_parts' `-occluded.xyz`: no underside) fits open by default, accurately, and
 //! OpenCASCADE reads a valid open shell; a mesh whose bottom was cut away does the same; a
-//! closed input stays closed and byte-identical to `--close smooth`; `--close smooth` closes
-//! an opening by extrapolation; bad values are refused before any work.
+//! closed input stays closed and byte-identical to `--close smooth`, unless its closed surface
+//! cannot follow the data (the cow as a cloud), which then fits open; `--close smooth` closes an
+//! opening by extrapolation; bad values are refused before any work.
 
 use crate::common::{self, json_f64 as f};
 use std::path::{Path, PathBuf};
@@ -197,6 +198,44 @@ fn slow_parts_thinner_than_a_patch_get_smaller_patches() {
     );
     assert_eq!(b["close"]["coverage"]["covered"], false);
     assert!((f(&b, &["patches"]) - 1500.0).abs() < 0.2 * 1500.0);
+}
+
+/// A closed model given as a cloud whose thin parts the sampling does not resolve (the cow's
+/// ear cups and tail: two sides a few hundredths apart, 1/100 of the diagonal between points):
+/// the rays say the data enclose a volume, but the closed implicit cannot follow those parts
+/// (its net fails, or closes them by blobs away from the data). `auto` then fits the scanned
+/// surface open, says why, and adds no surface away from the data.
+#[test]
+fn slow_closed_cloud_with_unresolved_thin_parts_falls_back_to_open() {
+    let Some(cow) = common::shared_model("cow.obj") else {
+        return;
+    };
+    let mesh = scansurf::io::read_mesh(&cow).unwrap();
+    let diag = scansurf::mesh::Aabb::of(&mesh.positions)
+        .unwrap()
+        .diagonal();
+    let (samples, _) = scansurf::mesh::sample::sample_surface(&mesh, 0.01 * diag);
+    let dir = common::scratch_dir("cli_close_cow");
+    let cloud = dir.join("cow.xyz");
+    let text: String = mesh
+        .positions
+        .iter()
+        .chain(&samples)
+        .map(|p| format!("{} {} {}\n", p.x, p.y, p.z))
+        .collect();
+    std::fs::write(&cloud, text).unwrap();
+    let r = common::fit_report(&cloud, &dir.join("cow.step"), &[]);
+    let close = &r["close"];
+    assert_eq!(close["requested"], "auto");
+    assert_eq!(close["chosen"], "open", "{close}");
+    let reason = close["reason"].as_str().unwrap();
+    assert!(
+        reason.contains("enclose a volume") && reason.contains("only the scanned surface"),
+        "{reason}"
+    );
+    assert_eq!(r["closed"], false);
+    let far = f(&r, &["support_far", "unsupported_fraction"]);
+    assert!(far < 0.01, "{far} of the area far from the data");
 }
 
 /// A closed input: `auto` keeps it closed, byte for byte what `--close smooth` writes.
