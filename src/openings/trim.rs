@@ -13,18 +13,13 @@
 //!
 //! After 8 mixed passes only drops are made (spurs and pinches), which shrinks the kept set
 //! monotonically and so ends. Components with fewer than [`MIN_COMPONENT_SHARE`] of the largest
-//! one's quads are dropped when they lie beside it (flakes of the implicit next to the data,
-//! not scanned surface), kept when most of their nodes lie [`APART`] edge lengths or more from
-//! it (a leg seen from the side, cut from the body where the net left the data).
+//! one's quads are dropped: flakes of the implicit beside the data, not scanned surface.
 
 use crate::polygonize::QuadNet;
 use crate::{Error, Result};
 
 /// Components smaller than this share of the largest are dropped.
 pub const MIN_COMPONENT_SHARE: f64 = 0.05;
-/// Distance, in mean edge lengths, from the largest component beyond which a small component's
-/// nodes count as apart from it.
-pub const APART: f64 = 3.0;
 /// Passes that may add quads (notches) before only drops are made.
 const MIXED_PASSES: usize = 8;
 
@@ -177,9 +172,8 @@ fn drop_pinch(fan: &[u32], cyclic: bool, k: &mut [bool]) -> usize {
     dropped
 }
 
-/// Drops the kept components under [`MIN_COMPONENT_SHARE`] of the largest that lie beside it
-/// (fewer than half their nodes farther than [`APART`] mean edge lengths from its nodes);
-/// returns the quads dropped.
+/// Drops the kept components under [`MIN_COMPONENT_SHARE`] of the largest; returns the quads
+/// dropped.
 fn drop_small_components(net: &QuadNet, k: &mut [bool]) -> usize {
     let mut comp = vec![usize::MAX; k.len()];
     let mut sizes = Vec::new();
@@ -203,83 +197,15 @@ fn drop_small_components(net: &QuadNet, k: &mut [bool]) -> usize {
         }
         sizes.push(size);
     }
-    let Some(main) = (0..sizes.len()).max_by_key(|&c| (sizes[c], std::cmp::Reverse(c))) else {
-        return 0;
-    };
-    let largest = sizes[main] as f64;
-    let small: Vec<bool> = sizes
-        .iter()
-        .map(|&n| (n as f64) < MIN_COMPONENT_SHARE * largest)
-        .collect();
-    let apart = apart_components(net, k, &comp, main, &small);
+    let largest = sizes.iter().copied().max().unwrap_or(0) as f64;
     let mut dropped = 0;
     for q in 0..k.len() {
-        if k[q] && small[comp[q]] && !apart[comp[q]] {
+        if k[q] && (sizes[comp[q]] as f64) < MIN_COMPONENT_SHARE * largest {
             k[q] = false;
             dropped += 1;
         }
     }
     dropped
-}
-
-/// Per component: whether it is small and at least half its nodes lie farther than [`APART`]
-/// mean edge lengths of the kept quads from every node of the largest component `main` (a part
-/// of the scanned surface that only its own component covers, like a leg seen from the side
-/// whose join to the body the cut removed; a flake of the implicit lies beside the surface).
-fn apart_components(
-    net: &QuadNet,
-    k: &[bool],
-    comp: &[usize],
-    main: usize,
-    small: &[bool],
-) -> Vec<bool> {
-    let mut apart = vec![false; small.len()];
-    if !small.contains(&true) {
-        return apart;
-    }
-    let (mut edge_sum, mut edges) = (0.0, 0usize);
-    let mut main_nodes = Vec::new();
-    let mut seen = vec![false; net.nodes.len()];
-    for (q, quad) in net.quads.iter().enumerate() {
-        if !k[q] {
-            continue;
-        }
-        for i in 0..4 {
-            let (a, b) = (quad[i] as usize, quad[(i + 1) % 4] as usize);
-            edge_sum += (net.nodes[a] - net.nodes[b]).norm();
-            edges += 1;
-            if comp[q] == main && !seen[a] {
-                seen[a] = true;
-                main_nodes.push(net.nodes[a]);
-            }
-        }
-    }
-    let Ok(kd) = crate::spatial::KdTree::build(&main_nodes) else {
-        return apart;
-    };
-    let reach = APART * edge_sum / edges.max(1) as f64;
-    // (far nodes, nodes) per component, each node counted once per component.
-    let mut tally = vec![(0usize, 0usize); small.len()];
-    let mut counted = vec![usize::MAX; net.nodes.len()];
-    for (q, quad) in net.quads.iter().enumerate() {
-        if !k[q] || !small[comp[q]] {
-            continue;
-        }
-        for &n in quad {
-            let n = n as usize;
-            if counted[n] == comp[q] {
-                continue;
-            }
-            counted[n] = comp[q];
-            let t = &mut tally[comp[q]];
-            t.1 += 1;
-            t.0 += (kd.nearest(&net.nodes[n]).1 > reach) as usize;
-        }
-    }
-    for (c, &(far, all)) in tally.iter().enumerate() {
-        apart[c] = small[c] && 2 * far >= all && all > 0;
-    }
-    apart
 }
 
 #[cfg(test)]
@@ -357,62 +283,6 @@ mod tests {
         assert!(!all.is_open());
         assert_eq!(r.boundary_loops, 0);
         assert_eq!(all.quads.len(), net.quads.len());
-    }
-
-    #[test]
-    fn small_pieces_apart_from_the_surface_are_kept() {
-        let net = sphere_net();
-        let centre = |q: &[u32; 4]| {
-            Point3::from(
-                q.iter()
-                    .map(|&v| net.nodes[v as usize].coords)
-                    .sum::<nalgebra::Vector3<f64>>()
-                    / 4.0,
-            )
-        };
-        let near = |q: &[u32; 4], c: [f64; 3], r: f64| (centre(q) - Point3::from(c)).norm() < r;
-        let cap = |q: &[u32; 4]| q.iter().all(|&v| net.nodes[v as usize].z > 0.3);
-        // The upper cap, a small piece at the bottom (apart from it: a leg cut from the body)
-        // and a small piece just below the cap's rim (beside it: a flake).
-        let bottom = |q: &[u32; 4]| near(q, [0.0, 0.0, -1.0], 0.25);
-        // Rings of quads around the cap (edge-neighbours of the previous ring).
-        let mut ring = vec![0usize; net.quads.len()];
-        for (q, r) in ring.iter_mut().enumerate() {
-            *r = if cap(&net.quads[q]) { 0 } else { usize::MAX };
-        }
-        for level in 1..=3 {
-            let prev: Vec<usize> = (0..ring.len()).filter(|&q| ring[q] == level - 1).collect();
-            for q in prev {
-                for o in neighbours(&net, q).collect::<Vec<_>>() {
-                    if ring[o] == usize::MAX {
-                        ring[o] = level;
-                    }
-                }
-            }
-        }
-        let index: std::collections::HashMap<[u32; 4], usize> =
-            net.quads.iter().enumerate().map(|(i, q)| (*q, i)).collect();
-        let flake = |q: &[u32; 4]| {
-            let r = ring[index[q]];
-            (r == 2 || r == 3) && centre(q).x > 0.5 && centre(q).y.abs() < 0.25
-        };
-        let keep: Vec<bool> = net
-            .quads
-            .iter()
-            .map(|q| cap(q) || bottom(q) || flake(q))
-            .collect();
-        let count = |f: &dyn Fn(&[u32; 4]) -> bool| net.quads.iter().filter(|q| f(q)).count();
-        let (n_cap, n_bottom, n_flake) = (count(&cap), count(&bottom), count(&flake));
-        assert!(
-            n_bottom >= 4
-                && n_flake >= 4
-                && ((n_bottom.max(n_flake) as f64) < MIN_COMPONENT_SHARE * n_cap as f64),
-            "{n_cap} {n_bottom} {n_flake}"
-        );
-        let (open, rep) = trim_to_data(&net, &keep).unwrap();
-        assert_eq!(rep.components, 2, "{rep:?}");
-        assert_eq!(rep.small_component_quads_dropped, n_flake, "{rep:?}");
-        assert!(open.nodes.iter().any(|p| p.z < -0.9));
     }
 
     #[test]
