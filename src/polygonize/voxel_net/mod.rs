@@ -64,9 +64,9 @@
 //! no supported node are dropped, and when the seeds are dense (some component has at least
 //! half its nodes supported: the seeds are a point cloud of the surface) so are components with
 //! less than 3/4 of the reference share and single-voxel components (counted in the stats). The
-//! reference is the component with the most supported nodes, the surface the seeds describe (a
-//! few voxels around a horn's tip can be fully supported; measured against them, the cow's
-//! surface, 61 % supported at 1,500 patches, was dropped and the fit failed). These are
+//! reference is the best share of the components larger than a voxel (the single voxel around a
+//! horn's tip can be fully supported; measured against it, the cow's surface, 61 % supported at
+//! 1,500 patches, was dropped and the fit failed). These are
 //! zero sets the implicit has away from the data (bubbles inside a solid next to the surface,
 //! sheets far out), not the surface the seeds describe. (On the Stanford bunny with a test
 //! IMLS: the surface 100 %, eight bubbles 0-50 %.)

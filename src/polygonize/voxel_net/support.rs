@@ -86,16 +86,20 @@ impl<I: Implicit + ?Sized> Builder<'_, I> {
             .iter()
             .map(|&(all, sup)| sup as f64 / all as f64)
             .collect();
-        // The reference share: that of the component with the most supported nodes (the
-        // surface the seeds describe; the few voxels around the tip of a horn can be fully
-        // supported, but they say nothing about the surface's own share).
-        let best = (0..count)
-            .max_by(|&a, &b| {
-                (tally[a].1.cmp(&tally[b].1))
-                    .then(share[a].total_cmp(&share[b]))
-                    .then(b.cmp(&a))
-            })
-            .map_or(0.0, |c| share[c]);
+        // The reference share: the best of the components large enough to keep (a single
+        // voxel around the tip of a horn can be fully supported, but says nothing about the
+        // surface's own share).
+        let best_of = |min_nodes: usize| {
+            share
+                .iter()
+                .zip(&tally)
+                .filter(|(_, &(nodes, _))| nodes >= min_nodes)
+                .fold(0.0f64, |a, (&b, _)| a.max(b))
+        };
+        let best = match best_of(MIN_KEPT_NODES) {
+            b if b > 0.0 => b,
+            _ => best_of(0),
+        };
         // Dense seeds (a point cloud): the surface's own components are supported almost
         // everywhere. Sparse seeds (a few points per component): any support counts.
         let dense = best >= 0.5;
