@@ -258,26 +258,8 @@ pub fn fit_measured(
     // `auto` closed a surface the data do not back, or could not build the closed net: fitted
     // again, open. When that fails too, the closed result (with its warning) or its error
     // stands.
-    let because = match &first {
-        Ok(b) if b.1.unsupported_share > crate::openings::CLOSED_UNSUPPORTED => Some(format!(
-            "{:.1} % of the closed surface has no point within a voxel (more than {:.0} %: \
-             parts thinner than the sampling resolves, which the implicit closes away from the \
-             data)",
-            100.0 * b.1.unsupported_share,
-            100.0 * crate::openings::CLOSED_UNSUPPORTED
-        )),
-        Ok(_) => None,
-        // The error's first clause ("the quad net could not be projected onto the implicit
-        // surface"); the whole message is returned if the open fit fails too.
-        Err(e) => Some(format!(
-            "the closed surface could not be made ({})",
-            e.to_string()
-                .split([':', '('])
-                .next()
-                .unwrap_or_default()
-                .trim()
-        )),
-    };
+    let because =
+        crate::openings::decide::closed_shortfall(first.as_ref().map(|b| b.1.unsupported_share));
     let mut reopened = closure.clone();
     let (f, (net, net_report, trial_sampling, coverage)) = match because {
         Some(because) if reopened.reopen(&because) => {

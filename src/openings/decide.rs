@@ -86,6 +86,33 @@ pub fn choose(requested: Close, enclosure: Enclosure) -> ClosureReport {
     }
 }
 
+/// Why a closed fit does not follow the data, given its net's unsupported share or the error
+/// of its net: more than [`super::CLOSED_UNSUPPORTED`] of it unsupported (parts thinner than
+/// the sampling resolves, closed away from the data), or no net at all. `None` when the
+/// closed fit stands. The words go to [`ClosureReport::reopen`].
+pub fn closed_shortfall(closed: std::result::Result<f64, &crate::Error>) -> Option<String> {
+    match closed {
+        Ok(u) if u > super::CLOSED_UNSUPPORTED => Some(format!(
+            "{:.1} % of the closed surface has no point within a voxel (more than {:.0} %: \
+             parts thinner than the sampling resolves, which the implicit closes away from the \
+             data)",
+            100.0 * u,
+            100.0 * super::CLOSED_UNSUPPORTED
+        )),
+        Ok(_) => None,
+        // The error's first clause ("the quad net could not be projected onto the implicit
+        // surface"); the caller returns the whole error if the open fit fails too.
+        Err(e) => Some(format!(
+            "the closed surface could not be made ({})",
+            e.to_string()
+                .split([':', '('])
+                .next()
+                .unwrap_or_default()
+                .trim()
+        )),
+    }
+}
+
 impl ClosureReport {
     /// `auto` chose `smooth`, but the closed surface does not follow the data (`because`
     /// says how: more than [`super::CLOSED_UNSUPPORTED`] of it unsupported, or its net failed):
@@ -134,6 +161,21 @@ mod tests {
             escaped: 2,
             escape_share: 0.002,
         }
+    }
+
+    #[test]
+    fn shortfall_over_the_bar_or_on_failure() {
+        assert_eq!(closed_shortfall(Ok(0.0)), None);
+        assert_eq!(
+            closed_shortfall(Ok(crate::openings::CLOSED_UNSUPPORTED)),
+            None
+        );
+        let over = closed_shortfall(Ok(0.104)).unwrap();
+        assert!(over.starts_with("10.4 % of the closed surface"), "{over}");
+        let e = crate::Error::Numerical("the quad net could not be projected: details".into());
+        let failed = closed_shortfall(Err(&e)).unwrap();
+        assert!(failed.contains("could not be made"), "{failed}");
+        assert!(!failed.contains("details"), "{failed}");
     }
 
     #[test]

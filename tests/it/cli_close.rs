@@ -217,13 +217,9 @@ fn slow_closed_cloud_with_unresolved_thin_parts_falls_back_to_open() {
     let (samples, _) = scansurf::mesh::sample::sample_surface(&mesh, 0.01 * diag);
     let dir = common::scratch_dir("cli_close_cow");
     let cloud = dir.join("cow.xyz");
-    let text: String = mesh
-        .positions
-        .iter()
-        .chain(&samples)
-        .map(|p| format!("{} {} {}\n", p.x, p.y, p.z))
-        .collect();
-    std::fs::write(&cloud, text).unwrap();
+    let points = mesh.positions.iter().chain(&samples).copied().collect();
+    let points = scansurf::Mesh::from_points(points, None);
+    scansurf::io::write_mesh(&cloud, &points, Default::default()).unwrap();
     let r = common::fit_report(&cloud, &dir.join("cow.step"), &[]);
     let close = &r["close"];
     assert_eq!(close["requested"], "auto");
