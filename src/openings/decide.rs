@@ -102,14 +102,15 @@ pub fn closed_shortfall(closed: std::result::Result<f64, &crate::Error>) -> Opti
         Ok(_) => None,
         // The error's first clause ("the quad net could not be projected onto the implicit
         // surface"); the caller returns the whole error if the open fit fails too.
-        Err(e) => Some(format!(
-            "the closed surface could not be made ({})",
-            e.to_string()
-                .split([':', '('])
-                .next()
-                .unwrap_or_default()
-                .trim()
-        )),
+        Err(e) => {
+            // The message without the variant's prefix ("numerical failure: ").
+            let text = match e {
+                crate::Error::Numerical(m) | crate::Error::Degenerate(m) => m.clone(),
+                other => other.to_string(),
+            };
+            let clause = text.split([':', '(']).next().unwrap_or_default().trim();
+            Some(format!("the closed surface could not be made ({clause})"))
+        }
     }
 }
 
@@ -174,8 +175,10 @@ mod tests {
         assert!(over.starts_with("10.4 % of the closed surface"), "{over}");
         let e = crate::Error::Numerical("the quad net could not be projected: details".into());
         let failed = closed_shortfall(Err(&e)).unwrap();
-        assert!(failed.contains("could not be made"), "{failed}");
-        assert!(!failed.contains("details"), "{failed}");
+        assert_eq!(
+            failed,
+            "the closed surface could not be made (the quad net could not be projected)"
+        );
     }
 
     #[test]
