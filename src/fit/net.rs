@@ -5,6 +5,7 @@
 use crate::implicit::Implicit;
 use crate::mesh::Aabb;
 use crate::openings::coverage::{self, CoverageReport, CoverageRound};
+use crate::openings::pieces::fit_pieces;
 use crate::openings::{fit_rim, net_support, trim_to_data, Close, RimReport, TrimReport};
 use crate::polygonize::net_smooth::{project_and_smooth, SmoothOptions, SmoothReport};
 use crate::polygonize::patch_count::{
@@ -356,11 +357,14 @@ pub fn fit_open_net<I: Implicit + ?Sized, P>(
             far_share: far,
         });
         let fine = !coverage::needs_refinement(missed, far);
-        // Better: passes where the kept one does not, else misses fewer points.
+        // Better: passes where the kept one does not; else keeps its area near the data where
+        // the kept one does not (the points it misses get pieces of their own, area far from
+        // the data stays); else misses fewer points.
+        let near = |far: Option<f64>| far.is_none_or(|s| s <= coverage::FAR_SHARE);
         let better = best.is_none() || {
             let k = &rep.rounds[rep.kept];
             let kept_fine = !coverage::needs_refinement(k.missed_share, k.far_share);
-            (fine, -missed) > (kept_fine, -k.missed_share)
+            (fine, near(far), -missed) > (kept_fine, near(k.far_share), -k.missed_share)
         };
         if better {
             best = Some((net, report, kept));
@@ -391,10 +395,29 @@ pub fn fit_open_net<I: Implicit + ?Sized, P>(
             _ => break,
         }
     }
-    let Some((net, report, kept)) = best else {
+    let Some((mut net, mut report, mut kept)) = best else {
         return Err(failed.unwrap_or_else(|| Error::Degenerate("no quad net was built".into())));
     };
     rep.conclude(&remedy, failed.as_ref());
+    // Parts still missed get finer nets of their own ([`crate::openings::pieces`]).
+    if rep.rounds[rep.kept].missed_share > coverage::MISS_SHARE {
+        let step = (seeds.len() / 20_000).max(1);
+        let sample: Vec<Point3<f64>> = seeds.iter().step_by(step).copied().collect();
+        let spacing = crate::reconstruct::mean_spacing(&sample, data);
+        let (merged, pieces) = fit_pieces(&net, f, seeds, report.h, spacing, bounds.diagonal())?;
+        if !pieces.pieces.is_empty() {
+            net = merged;
+            // The trial sampling was of the net without the pieces.
+            kept = None;
+            report.patches = net.quads.len();
+            report.nodes = net.nodes.len();
+            report.edges = net.edges.len();
+            report.euler_characteristic = net.euler_characteristic();
+            report.components = net.components().1;
+            report.valence_histogram = net.valence_histogram();
+        }
+        rep.add_pieces(pieces, seeds.len());
+    }
     Ok((net, report, kept, rep))
 }
 

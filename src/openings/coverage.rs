@@ -30,6 +30,7 @@
 //! net that passes is kept, or else the one that misses the fewest points. With a size given,
 //! the report says what is wrong and which `--patches` would make a finer net.
 
+use super::pieces::PiecesReport;
 use crate::metrics::deviation::closest_point_on_triangle;
 use crate::polygonize::QuadNet;
 use crate::spatial::KdTree;
@@ -81,11 +82,15 @@ pub struct CoverageReport {
     pub covered: bool,
     /// What happened, in words (empty when the first net passed).
     pub note: String,
+    /// Finer nets for the parts the kept net still misses ([`super::pieces`]), when it misses
+    /// more than [`MISS_SHARE`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pieces: Option<PiecesReport>,
 }
 
 /// Distance from `x` to the quads (two triangles each) around the [`NODES_SEARCHED`] nodes of
 /// `net` nearest to it (`nodes` indexes them).
-fn distance_to_net(net: &QuadNet, nodes: &KdTree, x: &Point3<f64>) -> f64 {
+pub(super) fn distance_to_net(net: &QuadNet, nodes: &KdTree, x: &Point3<f64>) -> f64 {
     let mut best = f64::INFINITY;
     for (v, _) in nodes.knn(x, NODES_SEARCHED) {
         for &q in net.node_quads(v) {
@@ -148,6 +153,33 @@ fn faults(r: &CoverageRound) -> String {
 }
 
 impl CoverageReport {
+    /// Records the pieces fitted for the kept net's missed parts (of `n` input points): the
+    /// note says what they did, and the net is covered when the points still missed are at
+    /// most [`MISS_SHARE`] and the kept round's far share passes.
+    pub fn add_pieces(&mut self, pieces: PiecesReport, n: usize) {
+        let Some(kept) = self.rounds.get(self.kept) else {
+            return;
+        };
+        let still = pieces.still_missed_points as f64 / n.max(1) as f64;
+        if !pieces.pieces.is_empty() {
+            self.covered = !needs_refinement(still, kept.far_share);
+            let patches: usize = pieces.pieces.iter().map(|p| p.patches).sum();
+            let add = format!(
+                "{} finer piece{} ({patches} patches) fit the parts it misses, {} of the points \
+                 still missed",
+                pieces.pieces.len(),
+                if pieces.pieces.len() == 1 { "" } else { "s" },
+                pct(still)
+            );
+            self.note = if self.note.is_empty() {
+                add
+            } else {
+                format!("{}; {add}", self.note)
+            };
+        }
+        self.pieces = Some(pieces);
+    }
+
     /// Sets `covered` and `note` from the rounds made and the one kept; `remedy` says what
     /// would make a finer net or why none was made (may be empty), `failed` why a refinement
     /// round could not be built.

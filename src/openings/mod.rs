@@ -21,6 +21,7 @@
 pub mod coverage;
 pub mod decide;
 pub mod enclosure;
+pub mod pieces;
 pub mod rim;
 pub mod trim;
 

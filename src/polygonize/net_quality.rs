@@ -192,6 +192,20 @@ pub fn quality_with(net: &QuadNet, quad_normals: &[Vector3<f64>], residuals: &[f
     q
 }
 
+/// Per quad of `net` on the implicit `f`: flipped (its normal against f's gradient at its
+/// centre) or degenerate, as [`net_quality`] counts them.
+pub fn folded_quads<I: Implicit + ?Sized>(net: &QuadNet, f: &I, scale: f64, h: f64) -> Vec<bool> {
+    let n = quad_normals(f, net, &node_normals(f, &net.nodes), scale, h);
+    net.quads
+        .par_iter()
+        .zip(n.par_iter())
+        .map(|(q, n)| {
+            let s = quad_shape(&q.map(|i| net.nodes[i as usize]), n);
+            s.flipped || s.degenerate
+        })
+        .collect()
+}
+
 /// Quality of `net` on the implicit `f`; `scale` is the model size (for tolerances), `h` the
 /// nominal edge length.
 pub fn net_quality<I: Implicit + ?Sized>(net: &QuadNet, f: &I, scale: f64, h: f64) -> NetQuality {

@@ -145,7 +145,7 @@ fn mesh_with_a_cut_away_top_follows_the_same_choice() {
 /// crescents of its shoulders' lower halves (measured: 3.4 % of the points; input deviation
 /// p99 8.6e-2 of the diagonal before the coverage check), so `fit` builds the net again with
 /// twice the patches and says so (measured: 3,144 patches, 0.45 % missed, p99 2.5e-4); with
-/// `--patches 1500` given it keeps the count and warns with the count that would follow them.
+/// `--patches 1500` given it keeps the count and fits the shoulders by finer pieces.
 #[test]
 fn slow_parts_thinner_than_a_patch_get_smaller_patches() {
     let Some(dir) = common::stepped_part() else {
@@ -184,29 +184,33 @@ fn slow_parts_thinner_than_a_patch_get_smaller_patches() {
         b_json.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(
-        stderr.contains("warning: the net of")
-            && stderr.contains("misses")
-            && stderr.contains("--patches 3000"),
-        "{stderr}"
-    );
     let b: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&b_json).unwrap()).unwrap();
-    assert_eq!(
-        b["close"]["coverage"]["rounds"].as_array().unwrap().len(),
-        1
+    let cov = &b["close"]["coverage"];
+    assert_eq!(cov["rounds"].as_array().unwrap().len(), 1, "{cov}");
+    let net = f(&cov["rounds"][0], &["patches"]);
+    assert!((net - 1500.0).abs() < 0.2 * 1500.0, "{cov}");
+    // The main net keeps the count; the shoulders get finer pieces of their own (measured:
+    // 10 pieces, 1,578 patches, p99 2.4e-4), and the note still names the finer net.
+    let note = cov["note"].as_str().unwrap();
+    assert!(
+        note.contains("--patches 3000") && note.contains("finer piece"),
+        "{note}"
     );
-    assert_eq!(b["close"]["coverage"]["covered"], false);
-    assert!((f(&b, &["patches"]) - 1500.0).abs() < 0.2 * 1500.0);
+    assert_eq!(cov["covered"], true, "{cov}");
+    assert!(f(&b, &["patches"]) > net, "{cov}");
+    let p99 = f(&b, &["deviation", "relative", "p99"]);
+    assert!(p99 <= 5e-4, "p99 {p99}");
 }
 
-/// A closed model given as a cloud whose thin parts the sampling does not resolve (the cow's
-/// ear cups and tail: two sides a few hundredths apart, 1/100 of the diagonal between points):
-/// the rays say the data enclose a volume, but the closed implicit cannot follow those parts
-/// (its net fails, or closes them by blobs away from the data). `auto` then fits the scanned
-/// surface open, says why, and adds no surface away from the data.
+/// The cow seen from one side (the surface points whose normals face +z): its legs are
+/// half-tubes about a patch across and its tail a ribbon thinner than one, which the net of
+/// the whole misses (measured: 17.5 % of the points, input deviation p99 0.14 of the diagonal
+/// without the pieces). Finer nets of their own cover them ([`scansurf::openings::pieces`];
+/// measured: p99 8.9e-4, 0.4 % of the points still missed) and nothing is added away from the
+/// data (6e-5 of the area farther than 1 % of the diagonal).
 #[test]
-fn slow_closed_cloud_with_unresolved_thin_parts_falls_back_to_open() {
+fn slow_thin_one_sided_legs_get_pieces_of_their_own() {
     let Some(cow) = common::shared_model("cow.obj") else {
         return;
     };
@@ -214,24 +218,38 @@ fn slow_closed_cloud_with_unresolved_thin_parts_falls_back_to_open() {
     let diag = scansurf::mesh::Aabb::of(&mesh.positions)
         .unwrap()
         .diagonal();
-    let (samples, _) = scansurf::mesh::sample::sample_surface(&mesh, 0.01 * diag);
-    let dir = common::scratch_dir("cli_close_cow");
-    let cloud = dir.join("cow.xyz");
-    let points = mesh.positions.iter().chain(&samples).copied().collect();
-    let points = scansurf::Mesh::from_points(points, None);
-    scansurf::io::write_mesh(&cloud, &points, Default::default()).unwrap();
-    let r = common::fit_report(&cloud, &dir.join("cow.step"), &[]);
-    let close = &r["close"];
-    assert_eq!(close["requested"], "auto");
-    assert_eq!(close["chosen"], "open", "{close}");
-    let reason = close["reason"].as_str().unwrap();
+    let (samples, normals) = scansurf::mesh::sample::sample_surface(&mesh, 0.004 * diag);
+    let side: Vec<_> = samples
+        .iter()
+        .zip(&normals)
+        .filter(|(_, n)| n.z > 0.05)
+        .map(|(p, _)| *p)
+        .collect();
+    let dir = common::scratch_dir("cli_close_cow_side");
+    let cloud = dir.join("cow-side.xyz");
+    scansurf::io::write_mesh(
+        &cloud,
+        &scansurf::Mesh::from_points(side, None),
+        Default::default(),
+    )
+    .unwrap();
+    let r = common::fit_report(&cloud, &dir.join("cow-side.step"), &[]);
+    assert_eq!(r["close"]["chosen"], "open", "{}", r["close"]);
+    let cov = &r["close"]["coverage"];
+    let pieces = &cov["pieces"];
+    let list = pieces["pieces"].as_array().unwrap();
+    assert!(list.len() >= 2, "{pieces}");
     assert!(
-        reason.contains("enclose a volume") && reason.contains("only the scanned surface"),
-        "{reason}"
+        cov["note"].as_str().unwrap().contains("finer piece"),
+        "{cov}"
     );
-    assert_eq!(r["closed"], false);
+    let missed = f(pieces, &["missed_points"]);
+    let still = f(pieces, &["still_missed_points"]);
+    assert!(still < 0.2 * missed, "{pieces}");
+    let p99 = f(&r, &["deviation", "relative", "p99"]);
+    assert!(p99 <= 2e-3, "p99 {p99}");
     let far = f(&r, &["support_far", "unsupported_fraction"]);
-    assert!(far < 0.01, "{far} of the area far from the data");
+    assert!(far < 2e-3, "{}", r["support_far"]);
 }
 
 /// A closed input: `auto` keeps it closed, byte for byte what `--close smooth` writes.
