@@ -158,13 +158,7 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
     };
     let h = voxel_net.h;
     let (first_support, unsupported_share) = net_support(&voxel_net.net, data, h);
-    let spacing = if open {
-        let step = (seeds.len() / 20_000).max(1);
-        let sample: Vec<Point3<f64>> = seeds.iter().step_by(step).copied().collect();
-        crate::reconstruct::mean_spacing(&sample, data)
-    } else {
-        0.0
-    };
+    let spacing = if open { seed_spacing(seeds, data) } else { 0.0 };
     // Grid placements: the voxel grid shifted by 0, 1/3 and 2/3 of a voxel along the diagonal.
     // Where the surface is thinner than a voxel (the bunny's ears at 1,500 patches), whether
     // the net wraps the sheet cleanly or folds through it depends on how the grid happens to
@@ -290,24 +284,45 @@ pub fn fit_net<I: Implicit + ?Sized, P>(
              scanned surface; `scansurf reconstruct INPUT -o check.ply` shows the implicit"
         )));
     };
-    let report = NetReport {
+    let mut report = NetReport {
         unsupported_share,
         trim,
         rim,
         kept_trial,
         h,
-        patches: net.quads.len(),
-        nodes: net.nodes.len(),
-        edges: net.edges.len(),
-        euler_characteristic: net.euler_characteristic(),
-        components: net.components().1,
-        valence_histogram: net.valence_histogram(),
+        patches: 0,
+        nodes: 0,
+        edges: 0,
+        euler_characteristic: 0,
+        components: 0,
+        valence_histogram: Vec::new(),
         voxels: voxel_stats,
         placements: candidates,
         patch_count,
         smoothing,
     };
+    report.describe(&net);
     Ok((net, report, kept))
+}
+
+impl NetReport {
+    /// Sets the figures of the net itself: patches, nodes, edges, Euler characteristic,
+    /// components and valences.
+    fn describe(&mut self, net: &QuadNet) {
+        self.patches = net.quads.len();
+        self.nodes = net.nodes.len();
+        self.edges = net.edges.len();
+        self.euler_characteristic = net.euler_characteristic();
+        self.components = net.components().1;
+        self.valence_histogram = net.valence_histogram();
+    }
+}
+
+/// Mean spacing of `seeds` (indexed by `data`), measured on at most about 20,000 of them.
+fn seed_spacing(seeds: &[Point3<f64>], data: &KdTree) -> f64 {
+    let step = (seeds.len() / 20_000).max(1);
+    let sample: Vec<Point3<f64>> = seeds.iter().step_by(step).copied().collect();
+    crate::reconstruct::mean_spacing(&sample, data)
 }
 
 /// [`fit_net`] with `Close::Open`, and the coverage check of [`crate::openings::coverage`]:
@@ -401,20 +416,13 @@ pub fn fit_open_net<I: Implicit + ?Sized, P>(
     rep.conclude(&remedy, failed.as_ref());
     // Parts still missed get finer nets of their own ([`crate::openings::pieces`]).
     if rep.rounds[rep.kept].missed_share > coverage::MISS_SHARE {
-        let step = (seeds.len() / 20_000).max(1);
-        let sample: Vec<Point3<f64>> = seeds.iter().step_by(step).copied().collect();
-        let spacing = crate::reconstruct::mean_spacing(&sample, data);
+        let spacing = seed_spacing(seeds, data);
         let (merged, pieces) = fit_pieces(&net, f, seeds, report.h, spacing, bounds.diagonal())?;
         if !pieces.pieces.is_empty() {
             net = merged;
             // The trial sampling was of the net without the pieces.
             kept = None;
-            report.patches = net.quads.len();
-            report.nodes = net.nodes.len();
-            report.edges = net.edges.len();
-            report.euler_characteristic = net.euler_characteristic();
-            report.components = net.components().1;
-            report.valence_histogram = net.valence_histogram();
+            report.describe(&net);
         }
         rep.add_pieces(pieces, seeds.len());
     }

@@ -90,7 +90,7 @@ pub struct CoverageReport {
 
 /// Distance from `x` to the quads (two triangles each) around the [`NODES_SEARCHED`] nodes of
 /// `net` nearest to it (`nodes` indexes them).
-pub(super) fn distance_to_net(net: &QuadNet, nodes: &KdTree, x: &Point3<f64>) -> f64 {
+fn distance_to_net(net: &QuadNet, nodes: &KdTree, x: &Point3<f64>) -> f64 {
     let mut best = f64::INFINITY;
     for (v, _) in nodes.knn(x, NODES_SEARCHED) {
         for &q in net.node_quads(v) {
@@ -109,17 +109,21 @@ pub fn missed_share(net: &QuadNet, points: &[Point3<f64>], h: f64) -> f64 {
     if points.is_empty() {
         return 0.0;
     }
-    let Ok(nodes) = KdTree::build(&net.nodes) else {
-        return 1.0;
-    };
     let step = points.len().div_ceil(SAMPLE).max(1);
-    let sample: Vec<&Point3<f64>> = points.iter().step_by(step).collect();
-    let r = MISS_DISTANCE * h;
-    let missed = sample
-        .par_iter()
-        .filter(|p| distance_to_net(net, &nodes, p) > r)
-        .count();
-    missed as f64 / sample.len() as f64
+    let sample: Vec<Point3<f64>> = points.iter().step_by(step).copied().collect();
+    missed_points(net, &sample, MISS_DISTANCE * h).len() as f64 / sample.len() as f64
+}
+
+/// Indices of `points` farther than `r` from the quads of `net` (all of them for a net
+/// without nodes).
+pub fn missed_points(net: &QuadNet, points: &[Point3<f64>], r: f64) -> Vec<usize> {
+    let Ok(nodes) = KdTree::build(&net.nodes) else {
+        return (0..points.len()).collect();
+    };
+    (0..points.len())
+        .into_par_iter()
+        .filter(|&i| distance_to_net(net, &nodes, &points[i]) > r)
+        .collect()
 }
 
 /// Whether a net that misses `missed` of the points, and whose trial patches have `far` of

@@ -24,6 +24,7 @@
 //! main net does not reach, so a piece begins where the main net's rim ends, with a seam about
 //! half a voxel wide that is not sewn (the shell is open anyway; the report gives the pieces).
 
+use super::coverage::missed_points;
 use super::{fit_rim, net_support, trim_to_data};
 use crate::implicit::Implicit;
 use crate::mesh::Aabb;
@@ -86,17 +87,6 @@ pub struct PiecesReport {
     pub still_missed_points: usize,
 }
 
-/// Indices of `points` farther than `r` from the quads of `net`.
-pub fn missed_points(net: &QuadNet, points: &[Point3<f64>], r: f64) -> Vec<usize> {
-    let Ok(nodes) = KdTree::build(&net.nodes) else {
-        return (0..points.len()).collect();
-    };
-    (0..points.len())
-        .into_par_iter()
-        .filter(|&i| super::coverage::distance_to_net(net, &nodes, &points[i]) > r)
-        .collect()
-}
-
 /// Single-linkage clusters of `pts` at distance `link`: lists of indices into `pts`, largest
 /// first (ties by first index, so the order is deterministic).
 fn clusters(pts: &[Point3<f64>], link: f64) -> Vec<Vec<usize>> {
@@ -131,27 +121,26 @@ fn clusters(pts: &[Point3<f64>], link: f64) -> Vec<Vec<usize>> {
     out
 }
 
-/// The finer open net of the implicit `f` over the points `cluster` (voxel edge `hk`):
-/// cut to them, projected, smoothed and carried to their edge, and the share of them it
-/// misses.
+/// The finer open net of the implicit `f` over the points `cluster` (indexed by `data`,
+/// boxed by `bounds`; voxel edge `hk`): cut to them, projected, smoothed and carried to their
+/// edge; with the share of them it misses and the folded quads cut from it.
 fn piece_net<I: Implicit + ?Sized>(
     f: &I,
     cluster: &[Point3<f64>],
+    data: &KdTree,
+    bounds: &Aabb,
     hk: f64,
     spacing: f64,
     scale: f64,
 ) -> Result<(QuadNet, f64, usize)> {
-    let data = KdTree::build(cluster)?;
-    let bounds = Aabb::of(cluster)
-        .ok_or_else(|| crate::Error::Degenerate("a piece without points".into()))?;
     let mut opt = VoxelNetOptions::new(hk);
     opt.max_voxels = MAX_PIECE_VOXELS;
-    let voxel = build_voxel_net(f, cluster, &bounds, &opt)?;
-    let (support, _) = net_support(&voxel.net, &data, hk);
+    let voxel = build_voxel_net(f, cluster, bounds, &opt)?;
+    let (support, _) = net_support(&voxel.net, data, hk);
     let (mut net, _) = trim_to_data(&voxel.net, &support)?;
     let smooth = SmoothOptions::new(scale, hk);
     project_and_smooth(&mut net, f, &smooth)?;
-    let (net, _, _) = fit_rim(&net, f, &data, hk, spacing, &smooth)?;
+    let (net, _, _) = fit_rim(&net, f, data, hk, spacing, &smooth)?;
     // Folded quads (where the piece's net crosses a part still too thin for it) are cut out.
     let folded = folded_quads(&net, f, scale, hk);
     let folds = folded.iter().filter(|&&b| b).count();
@@ -203,10 +192,14 @@ pub fn fit_pieces<I: Implicit + ?Sized>(
         .take(MAX_PIECES)
         .map(|g| {
             let cluster: Vec<Point3<f64>> = g.iter().map(|&i| missed_pts[i]).collect();
+            let data = KdTree::build(&cluster).ok()?;
+            let b = Aabb::of(&cluster)?;
             let mut best: Option<(QuadNet, f64, f64, usize)> = None;
             for k in REFINEMENTS {
                 let hk = h / k;
-                let Ok((piece, miss, folds)) = piece_net(f, &cluster, hk, spacing, scale) else {
+                let Ok((piece, miss, folds)) =
+                    piece_net(f, &cluster, &data, &b, hk, spacing, scale)
+                else {
                     continue;
                 };
                 if best.as_ref().is_none_or(|b| miss < b.1) {
@@ -217,7 +210,6 @@ pub fn fit_pieces<I: Implicit + ?Sized>(
                 }
             }
             let (piece, miss, hk, folds) = best.filter(|b| b.1 < 1.0)?;
-            let b = Aabb::of(&cluster)?;
             let c = nalgebra::center(&b.min, &b.max);
             let report = PieceReport {
                 points: cluster.len(),

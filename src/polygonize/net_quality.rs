@@ -193,7 +193,8 @@ pub fn quality_with(net: &QuadNet, quad_normals: &[Vector3<f64>], residuals: &[f
 }
 
 /// Per quad of `net` on the implicit `f`: flipped (its normal against f's gradient at its
-/// centre) or degenerate, as [`net_quality`] counts them.
+/// centre) or degenerate by its shape, as [`net_quality`] counts them (which also counts a
+/// quad with an edge of near-zero length as degenerate).
 pub fn folded_quads<I: Implicit + ?Sized>(net: &QuadNet, f: &I, scale: f64, h: f64) -> Vec<bool> {
     let n = quad_normals(f, net, &node_normals(f, &net.nodes), scale, h);
     net.quads
