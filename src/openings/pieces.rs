@@ -18,7 +18,8 @@
 //!    points support ([`super::trim`]), projected and smoothed, and carried to the edge of
 //!    the cluster's data ([`super::rim`]), exactly as the main net is against all the data.
 //!    The first h_k whose piece leaves at most [`PIECE_MISS`] of the cluster's points farther
-//!    than `PIECE_DISTANCE` h_k from it is kept, else the piece that misses the fewest.
+//!    than `PIECE_DISTANCE` h_k from it is kept, else the piece that misses the fewest, if it
+//!    misses at most [`MAX_PIECE_MISS`] of them.
 //!
 //! The pieces join the net as components of their own: the cluster's points are those the
 //! main net does not reach, so a piece begins where the main net's rim ends, with a seam about
@@ -44,11 +45,15 @@ pub const PIECE_DISTANCE: f64 = 0.25;
 /// Missed points closer than this many voxels h belong to one cluster.
 pub const LINK: f64 = 0.5;
 /// Fewest points of a cluster that gets a piece.
-pub const MIN_PIECE_POINTS: usize = 48;
+pub const MIN_PIECE_POINTS: usize = 12;
 /// Voxel refinements tried for a piece: h / k.
 pub const REFINEMENTS: [f64; 4] = [2.0, 3.0, 4.0, 6.0];
 /// Largest share of its cluster's points a piece may miss and be kept at once.
 pub const PIECE_MISS: f64 = 0.05;
+/// Largest share of its cluster's points a piece may miss and be kept at all: a piece that
+/// cannot follow most of its points spans them badly (a 23-point crescent of the stepped
+/// shaft at `--patches 1500` got a 9-patch piece missing 61 % of them, folded 180 degrees).
+pub const MAX_PIECE_MISS: f64 = 0.5;
 /// Clusters fitted at most (the largest).
 pub const MAX_PIECES: usize = 64;
 /// Voxels evaluated at most for one piece.
@@ -81,7 +86,8 @@ pub struct PiecesReport {
     pub small_cluster_points: usize,
     /// The pieces added.
     pub pieces: Vec<PieceReport>,
-    /// Clusters for which no piece could be made (no net, or it covered nothing).
+    /// Clusters for which no piece could be made (no net, or it missed more than
+    /// [`MAX_PIECE_MISS`] of their points).
     pub failed: usize,
     /// Input points no net reaches after the pieces were added.
     pub still_missed_points: usize,
@@ -209,7 +215,7 @@ pub fn fit_pieces<I: Implicit + ?Sized>(
                     break;
                 }
             }
-            let (piece, miss, hk, folds) = best.filter(|b| b.1 < 1.0)?;
+            let (piece, miss, hk, folds) = best.filter(|b| b.1 <= MAX_PIECE_MISS)?;
             let c = nalgebra::center(&b.min, &b.max);
             let report = PieceReport {
                 points: cluster.len(),

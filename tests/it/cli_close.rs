@@ -191,7 +191,7 @@ fn slow_parts_thinner_than_a_patch_get_smaller_patches() {
     let net = f(&cov["rounds"][0], &["patches"]);
     assert!((net - 1500.0).abs() < 0.2 * 1500.0, "{cov}");
     // The main net keeps the count; the shoulders get finer pieces of their own (measured:
-    // 10 pieces, 1,578 patches, p99 2.4e-4), and the note still names the finer net.
+    // 11 pieces, 1,571 patches, p99 2.4e-4), and the note still names the finer net.
     let note = cov["note"].as_str().unwrap();
     assert!(
         note.contains("--patches 3000") && note.contains("finer piece"),
@@ -241,7 +241,7 @@ fn slow_closed_cloud_with_unresolved_thin_parts_falls_back_to_open() {
 /// half-tubes about a patch across and its tail a ribbon thinner than one, which the net of
 /// the whole misses (measured: 17.5 % of the points, input deviation p99 0.14 of the diagonal
 /// without the pieces). Finer nets of their own cover them ([`scansurf::openings::pieces`];
-/// measured: p99 8.9e-4, 0.4 % of the points still missed) and nothing is added away from the
+/// measured: p99 4.4e-4, 0.2 % of the points still missed) and nothing is added away from the
 /// data (6e-5 of the area farther than 1 % of the diagonal).
 #[test]
 fn slow_thin_one_sided_legs_get_pieces_of_their_own() {
