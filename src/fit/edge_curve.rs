@@ -291,6 +291,30 @@ fn sample_curve<I: Implicit + ?Sized>(
         .map_err(|err| Error::Numerical(format!("{}: {err}", where_())))
 }
 
+/// The chord points at t = k / n projected onto f = 0 along the gradient (what
+/// [`sample_edge`] falls back to last), for a caller that rejects the section curve: in an
+/// open fit a section that ran out into the implicit's extrapolation, far from every point
+/// (see [`crate::fit::samples::NearData`]). The samples stay within half an edge length of
+/// the chord (the projection's step bound), so the edge cannot wander off.
+pub fn sample_projected_chord<I: Implicit + ?Sized>(
+    f: &I,
+    a: Point3<f64>,
+    b: Point3<f64>,
+    n: usize,
+    tol: f64,
+) -> Result<EdgeSamples> {
+    let ga = f.gradient(&a);
+    let gb = f.gradient(&b);
+    if n == 0 || unit(ga).is_none() || unit(gb).is_none() {
+        return Err(Error::Numerical(
+            "projected chord: no samples or a vanishing gradient at an end".into(),
+        ));
+    }
+    let mut es = projected_chord(f, a, b, ga, gb, n, tol)?;
+    es.residuals = es.points.iter().map(|p| residual_at(f, p)).collect();
+    Ok(es)
+}
+
 /// Last resort: the chord points at t = k / n projected onto f = 0 along the gradient; the
 /// tangents are the chord projected onto the tangent plane (an approximation of d/dt).
 fn projected_chord<I: Implicit + ?Sized>(

@@ -7,7 +7,7 @@
 use super::cross_tangents::{align_cross_derivatives, corner_twists, BoundarySplines};
 use super::net::{fit_net, fit_open_net, NetReport, PatchSize, TrialScore};
 use super::samples::{
-    sample_patches, sample_patches_from, PatchSampling, SampleOptions, SampleReport,
+    sample_patches, sample_patches_from, NearData, PatchSampling, SampleOptions, SampleReport,
 };
 use super::vertex_twists::{corners_of, solve_vertex_twists, Corner};
 use crate::implicit::pou::{FitOptions as ImplicitOptions, FitStats, PouImplicit};
@@ -219,8 +219,10 @@ pub fn fit_measured(
     // first round of the real sampling.
     let tol = opts.tolerance * diag;
     let build_net = |f: &PouImplicit, close: crate::openings::Close| {
+        let open = close == crate::openings::Close::Open;
         let trial = |net: &QuadNet| -> Option<(TrialScore, PatchSampling)> {
             let mut o = SampleOptions::new(tol, diag);
+            o.near = open.then(|| NearData::for_net(&data, net));
             (o.min_intervals, o.max_intervals, o.max_rounds) =
                 (TRIAL_INTERVALS, TRIAL_INTERVALS, 1);
             // Only the kept placement's patches are measured, when the sampling starts from
@@ -237,7 +239,7 @@ pub fn fit_measured(
             };
             Some((score, sampling))
         };
-        if close == crate::openings::Close::Open {
+        if open {
             let (net, report, kept, coverage) = fit_open_net(
                 f,
                 &op.points,
@@ -302,6 +304,8 @@ pub fn fit_measured(
     progress("sampling", 0.5);
     let t = Instant::now();
     let mut sample_opts = SampleOptions::new(tol, diag);
+    sample_opts.near =
+        (closure.chosen == crate::openings::Close::Open).then(|| NearData::for_net(&data, &net));
     if opts
         .apron_unit
         .is_some_and(|u| crate::export::apron::patch_needs_apron(net_report.h, u))
