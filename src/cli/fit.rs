@@ -1,5 +1,5 @@
 //! `scansurf fit INPUT -o OUT.step [--iges OUT.igs] [--report R.json] [--patches N | --patch-size L]
-//! [--tolerance T] [--smooth N] [--deviation-ply D.ply] [--preview P.png]`.
+//! [--tolerance T] [--smooth N] [--deviation-ply D.ply] [--net NET.obj] [--preview P.png]`.
 
 use crate::error::{Error, Result};
 use crate::export::{ExportOptions, ExtendSurfaces, LengthUnit, Timestamp};
@@ -48,6 +48,10 @@ pub struct Args {
     /// `quality` + RGB), for MeshLab or CloudCompare.
     #[arg(long, value_name = "D.ply")]
     pub deviation_ply: Option<PathBuf>,
+    /// Write the quad net the patches were built on (OBJ: the patch corners as `v`, one quad
+    /// `f` per patch in the STEP's face order), to inspect the layout in any mesh viewer.
+    #[arg(long, value_name = "NET.obj")]
+    pub net: Option<PathBuf>,
     /// Write a rendered picture of the patch network with its patch boundaries.
     #[arg(long, value_name = "P.png")]
     pub preview: Option<PathBuf>,
@@ -114,6 +118,9 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     let (preview_w, preview_h) = crate::render::parse_size(&a.preview_size)?;
     if let Some(p) = &a.deviation_ply {
         super::check_ext(p, &["ply"], "the deviation cloud")?;
+    }
+    if let Some(p) = &a.net {
+        super::check_ext(p, &["obj"], "the quad net")?;
     }
     // `auto` is decided once the input is read (a mesh or a cloud).
     let auto_fill = a.fill_holes == "auto";
@@ -243,6 +250,19 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     }
     if let Some(r) = &a.report {
         super::write_json(r, &report)?;
+    }
+    if let Some(n) = &a.net {
+        let quads = network.quads();
+        let comments = [format!(
+            "quad net of {}: {} nodes, {} quads (one per patch, in the STEP's face order), {}",
+            name(&a.output),
+            network.vertices.len(),
+            quads.len(),
+            if network.closed { "closed" } else { "open" }
+        )];
+        crate::io::write_atomic(n, |w| {
+            crate::io::obj::write_quads(w, &network.vertices, &quads, &comments)
+        })?;
     }
     let pts = measured;
     if let Some(d) = &a.deviation_ply {

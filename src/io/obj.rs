@@ -174,6 +174,28 @@ pub fn write(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
     Ok(())
 }
 
+/// Writes a quad net as OBJ: a `#` line per entry of `comments`, `v` lines (full precision),
+/// one `f` line of four (1-based) vertices per quad.
+pub fn write_quads(
+    w: &mut dyn Write,
+    vertices: &[nalgebra::Point3<f64>],
+    quads: &[[u32; 4]],
+    comments: &[String],
+) -> std::io::Result<()> {
+    writeln!(w, "# written by scansurf {}", env!("CARGO_PKG_VERSION"))?;
+    for c in comments {
+        writeln!(w, "# {c}")?;
+    }
+    for p in vertices {
+        writeln!(w, "v {:?} {:?} {:?}", p.x, p.y, p.z)?;
+    }
+    for q in quads {
+        let [a, b, c, d] = q.map(|k| k + 1);
+        writeln!(w, "f {a} {b} {c} {d}")?;
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

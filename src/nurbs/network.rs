@@ -153,6 +153,25 @@ impl PatchNetwork {
         }
     }
 
+    /// The quad net the patches were built on: per face, its four corner vertices in loop
+    /// order ((u, v) = (0, 0), (1, 0), (1, 1), (0, 1): counter-clockwise around S_u x S_v), the
+    /// start of each loop edge. Faces follow `faces` (the STEP's face order).
+    pub fn quads(&self) -> Vec<[u32; 4]> {
+        self.faces
+            .iter()
+            .map(|f| {
+                f.edges.map(|(e, reversed)| {
+                    let v = self.edges[e as usize].v;
+                    if reversed {
+                        v[1]
+                    } else {
+                        v[0]
+                    }
+                })
+            })
+            .collect()
+    }
+
     /// How many faces use each edge.
     pub fn edge_use_counts(&self) -> Vec<usize> {
         let mut uses = vec![0usize; self.edges.len()];
@@ -418,7 +437,10 @@ mod tests {
     #[test]
     fn cube_network_is_closed_and_valid() {
         let (v, p) = cube();
+        let corners: Vec<[u32; 4]> = p.iter().map(|q| q.corners).collect();
         let net = PatchNetwork::from_patches(v, p).unwrap();
+        // The quad net comes back as the patches' corners.
+        assert_eq!(net.quads(), corners);
         assert_eq!(net.edges.len(), 12);
         assert!(net.closed);
         assert!(net.edge_use_counts().iter().all(|&n| n == 2));

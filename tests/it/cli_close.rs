@@ -35,6 +35,8 @@ fn block_open() -> Option<&'static OpenFit> {
                 iges.to_str().unwrap(),
                 "--preview",
                 dir.join("b.png").to_str().unwrap(),
+                "--net",
+                dir.join("b-net.obj").to_str().unwrap(),
             ],
         );
         OpenFit { dir, input, report }
@@ -316,6 +318,39 @@ fn slow_front_half_of_an_organic_scan_stays_on_its_data() {
     assert!(far < 2e-3, "{}", r["support_far"]);
     let p99 = f(&r, &["deviation", "relative", "p99"]);
     assert!(p99 <= 5e-4, "p99 {p99}");
+}
+
+/// `fit --net`: the quad net the patches were built on, one quad per patch, its nodes the
+/// patch corners; the open block's net has the report's node count and its boundary the
+/// report's free edges.
+#[test]
+fn slow_block_quad_net_is_written_as_obj() {
+    let Some(fit) = block_open() else {
+        return;
+    };
+    let text = std::fs::read_to_string(fit.dir.join("b-net.obj")).unwrap();
+    let faces: Vec<Vec<usize>> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("f "))
+        .map(|l| l.split_whitespace().map(|k| k.parse().unwrap()).collect())
+        .collect();
+    let nodes = text.lines().filter(|l| l.starts_with("v ")).count();
+    assert_eq!(faces.len() as f64, f(&fit.report, &["patches"]));
+    assert!(faces
+        .iter()
+        .all(|q| q.len() == 4 && q.iter().all(|&k| (1..=nodes).contains(&k))));
+    assert_eq!(nodes as f64, f(&fit.report, &["net", "nodes"]));
+    // Boundary edges: used by one quad.
+    let mut uses = std::collections::HashMap::new();
+    for q in &faces {
+        for k in 0..4 {
+            let (a, b) = (q[k], q[(k + 1) % 4]);
+            *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    let boundary = uses.values().filter(|&&n| n == 1).count();
+    assert_eq!(boundary as f64, f(&fit.report, &["free_edges"]));
+    assert!(uses.values().all(|&n| n <= 2));
 }
 
 /// A closed input: `auto` keeps it closed, byte for byte what `--close smooth` writes.
