@@ -303,15 +303,13 @@ fn slow_front_half_of_an_organic_scan_stays_on_its_data() {
     let Some(cow) = common::shared_model("cow.obj") else {
         return;
     };
-    let dir = common::scratch_dir("cli_close_cow_half");
-    let o = std::process::Command::new(py)
-        .arg(repo().join("scripts/half_scans.py"))
-        .arg(&dir)
-        .args(["--models", "cow", "--axes", "2", "--data"])
-        .arg(cow.parent().unwrap())
-        .output()
-        .expect("run half_scans.py");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let data = cow.parent().unwrap().to_str().unwrap();
+    let dir = common::make_with(
+        &py,
+        &repo().join("scripts/half_scans.py"),
+        "cli_close_cow_half",
+        &["--models", "cow", "--axes", "2", "--data", data],
+    );
     let r = common::fit_report(&dir.join("cow-h2.xyz"), &dir.join("cow-h2.step"), &[]);
     assert_eq!(r["close"]["chosen"], "open", "{}", r["close"]);
     let far = f(&r, &["support_far", "unsupported_fraction"]);

@@ -437,10 +437,12 @@ fn rebuild<I: Implicit + ?Sized>(
             });
             let (a, b) = (net.nodes[lo as usize], net.nodes[hi as usize]);
             let es = sample_edge(f, a, b, hint, n, tol)?;
-            Ok(match opt.near {
-                Some(near) => keep_near(near, es, || sample_projected_chord(f, a, b, n, tol)),
-                None => es,
-            })
+            Ok(keep_near(
+                opt.near,
+                es,
+                |e| &e.points,
+                || sample_projected_chord(f, a, b, n, tol).ok(),
+            ))
         })
         .collect::<Result<_>>()?;
     for (e, s) in todo.into_iter().zip(fresh) {

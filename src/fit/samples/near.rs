@@ -1,9 +1,7 @@
 //! Keeping an open fit's samples near its data ([`NearData`]).
 
-use super::super::edge_curve::EdgeSamples;
 use crate::polygonize::QuadNet;
 use crate::spatial::KdTree;
-use crate::Result;
 use nalgebra::Point3;
 
 /// Where samples belong in an open fit: within `radius` of some data point. Away from the data
@@ -42,7 +40,7 @@ impl<'a> NearData<'a> {
     }
 
     /// Distance from the data of the farthest of `points`.
-    pub(super) fn farthest<'p>(&self, points: impl IntoIterator<Item = &'p Point3<f64>>) -> f64 {
+    fn farthest<'p>(&self, points: impl IntoIterator<Item = &'p Point3<f64>>) -> f64 {
         points
             .into_iter()
             .map(|p| self.data.nearest(p).1)
@@ -50,28 +48,37 @@ impl<'a> NearData<'a> {
     }
 }
 
-/// `es`, or `other()` when `es` strays farther than `near.radius` from the data and `other`
-/// lies at most half as far (a section curve is kept over the projected chord, whose
+/// How much nearer the data a replacement must lie to be taken: at most this share of the
+/// original's distance (a section curve is kept over the projected chord or Coons row, whose
 /// tangents are only approximate, unless it clearly ran off).
-pub(super) fn keep_near(
-    near: NearData,
-    es: EdgeSamples,
-    other: impl FnOnce() -> Result<EdgeSamples>,
-) -> EdgeSamples {
-    let far = near.farthest(&es.points);
+const CLEARLY_NEARER: f64 = 0.5;
+
+/// `x` (an edge's or row's samples, `points` of it), or `other()` when `near` is given, `x`
+/// strays farther than `near.radius` from the data and `other()` lies at most
+/// [`CLEARLY_NEARER`] times as far.
+pub(super) fn keep_near<T>(
+    near: Option<NearData>,
+    x: T,
+    points: impl Fn(&T) -> &[Point3<f64>],
+    other: impl FnOnce() -> Option<T>,
+) -> T {
+    let Some(near) = near else {
+        return x;
+    };
+    let far = near.farthest(points(&x));
     if far <= near.radius {
-        return es;
+        return x;
     }
     match other() {
-        Ok(o) if near.farthest(&o.points) < 0.5 * far => o,
-        _ => es,
+        Some(o) if near.farthest(points(&o)) < CLEARLY_NEARER * far => o,
+        _ => x,
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fit::edge_curve::EdgeMethod;
+    use crate::fit::edge_curve::{EdgeMethod, EdgeSamples};
     use nalgebra::Vector3;
 
     /// An edge of samples along the x axis at height `z` (x from 0 to 1).
@@ -102,24 +109,30 @@ mod tests {
             radius: 0.1,
         };
         // Near the data: kept, the alternative not even made.
-        let kept = keep_near(near, edge_at(0.05, EdgeMethod::Lines), || {
+        fn points(e: &EdgeSamples) -> &[Point3<f64>] {
+            &e.points
+        }
+        let kept = keep_near(Some(near), edge_at(0.05, EdgeMethod::Lines), points, || {
             panic!("no alternative needed")
         });
         assert_eq!(kept.method, EdgeMethod::Lines);
         // Strayed 1.0 off: the chord-like alternative 0.02 off replaces it.
-        let swapped = keep_near(near, edge_at(1.0, EdgeMethod::Lines), || {
-            Ok(edge_at(0.02, EdgeMethod::ProjectedChord))
+        let swapped = keep_near(Some(near), edge_at(1.0, EdgeMethod::Lines), points, || {
+            Some(edge_at(0.02, EdgeMethod::ProjectedChord))
         });
         assert_eq!(swapped.method, EdgeMethod::ProjectedChord);
         // An alternative not at most half as far, or none at all: the section curve stays.
-        let same = keep_near(near, edge_at(1.0, EdgeMethod::Lines), || {
-            Ok(edge_at(0.6, EdgeMethod::ProjectedChord))
+        let same = keep_near(Some(near), edge_at(1.0, EdgeMethod::Lines), points, || {
+            Some(edge_at(0.6, EdgeMethod::ProjectedChord))
         });
         assert_eq!(same.method, EdgeMethod::Lines);
-        let same = keep_near(near, edge_at(1.0, EdgeMethod::Lines), || {
-            Err(crate::Error::Numerical("no chord".into()))
-        });
+        let same = keep_near(Some(near), edge_at(1.0, EdgeMethod::Lines), points, || None);
         assert_eq!(same.method, EdgeMethod::Lines);
+        // No data given (a closed fit): as it is, however far.
+        let closed = keep_near(None, edge_at(1.0, EdgeMethod::Lines), points, || {
+            panic!("a closed fit looks for nothing nearer")
+        });
+        assert_eq!(closed.method, EdgeMethod::Lines);
     }
 
     #[test]

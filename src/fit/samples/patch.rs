@@ -4,6 +4,7 @@
 
 use super::super::edge_curve::{residual, sample_section, EdgeSamples};
 use super::super::spline_check::spline_midpoints;
+use super::near::keep_near;
 use super::{uniform_params, PatchSamples, PatchSide, SampleOptions};
 use crate::implicit::Implicit;
 use crate::polygonize::newton::{project, solve_on_line, NewtonOptions};
@@ -332,23 +333,8 @@ pub(super) fn build_patch<I: Implicit + ?Sized>(
                         worst,
                     );
                     // In an open fit a section that strays from the data gives way to the
-                    // Coons row projected onto f = 0 when that lies nearer the data.
-                    match opt.near {
-                        Some(near) => {
-                            let far = near.farthest(&section.0);
-                            if far <= near.radius {
-                                section
-                            } else {
-                                let other = fallback();
-                                if near.farthest(&other.0) < 0.5 * far {
-                                    other
-                                } else {
-                                    section
-                                }
-                            }
-                        }
-                        None => section,
-                    }
+                    // Coons row projected onto f = 0 when that lies clearly nearer the data.
+                    keep_near(opt.near, section, |r| &r.0, || Some(fallback()))
                 }
                 _ => fallback(),
             }

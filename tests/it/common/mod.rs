@@ -208,14 +208,20 @@ pub fn shared_model(name: &str) -> Option<PathBuf> {
     }
 }
 
-/// Runs the part generator `script` (make_parts.py, or scripts/extra_parts.py which uses it)
-/// with the checker's `py` into a scratch directory `name` for `parts`; the directory.
-fn make_with(py: &Path, script: &Path, name: &str, parts: &str) -> PathBuf {
+/// Runs the generator `script` (make_parts.py, scripts/extra_parts.py or
+/// scripts/half_scans.py: `script OUT_DIR ARGS...`) with the checker's `py` into a scratch
+/// directory `name`; the directory.
+pub fn make_with<S: AsRef<std::ffi::OsStr>>(
+    py: &Path,
+    script: &Path,
+    name: &str,
+    args: &[S],
+) -> PathBuf {
     let dir = scratch_dir(name);
     let o = std::process::Command::new(py)
         .arg(script)
         .arg(&dir)
-        .args(["--parts", parts])
+        .args(args)
         .output()
         .expect("run the part generator");
     assert!(
@@ -236,7 +242,7 @@ pub fn stepped_part() -> Option<&'static PathBuf> {
     make_parts()?;
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/extra_parts.py");
     Some(shared(&PART, || {
-        make_with(&py, &script, "extra_parts_stepped", "stepped")
+        make_with(&py, &script, "extra_parts_stepped", &["--parts", "stepped"])
     }))
 }
 
@@ -259,7 +265,7 @@ pub fn make_parts() -> Option<&'static PathBuf> {
             &py,
             &tools.join("make_parts.py"),
             "make_parts",
-            "block,bracket",
+            &["--parts", "block,bracket"],
         )
     }))
 }
