@@ -86,6 +86,11 @@ pub struct TrialScore {
     /// Share of the trial patches' area farther than 1 % of the diagonal from the data (the
     /// report's `support_far` on these quick patches; [`fit_open_net`] refines on it).
     pub far_share: f64,
+    /// 99th percentile of the input points' distances from the trial patches (measured on at
+    /// most [`crate::openings::coverage::SAMPLE`] of them; open fits only: [`fit_open_net`]
+    /// adds pieces when it exceeds [`crate::openings::coverage::FAR_POINTS_P99`] voxels).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub points_p99: Option<f64>,
 }
 
 /// Net edges whose two end nodes have opposed unit normals of f: the net crosses a sheet
@@ -414,8 +419,13 @@ pub fn fit_open_net<I: Implicit + ?Sized, P>(
         return Err(failed.unwrap_or_else(|| Error::Degenerate("no quad net was built".into())));
     };
     rep.conclude(&remedy, failed.as_ref());
-    // Parts still missed get finer nets of their own ([`crate::openings::pieces`]).
-    if rep.rounds[rep.kept].missed_share > coverage::MISS_SHARE {
+    // Parts still missed, or followed too loosely by the trial patches, get finer nets of
+    // their own ([`crate::openings::pieces`]).
+    let loose = report
+        .kept_trial
+        .and_then(|t| t.points_p99)
+        .is_some_and(|p99| p99 > coverage::FAR_POINTS_P99 * report.h);
+    if rep.rounds[rep.kept].missed_share > coverage::MISS_SHARE || loose {
         let spacing = seed_spacing(seeds, data);
         let (merged, pieces) = fit_pieces(&net, f, seeds, report.h, spacing, bounds.diagonal())?;
         if !pieces.pieces.is_empty() {

@@ -218,6 +218,8 @@ pub fn fit_measured(
     // refinement, its jumps over 5 degrees counted. The kept placement's trial sampling is the
     // first round of the real sampling.
     let tol = opts.tolerance * diag;
+    // The points the trial patches of an open net are measured against.
+    let measured_sample = crate::openings::coverage::measured_sample(&op.points);
     let build_net = |f: &PouImplicit, close: crate::openings::Close| {
         let open = close == crate::openings::Close::Open;
         let trial = |net: &QuadNet| -> Option<(TrialScore, PatchSampling)> {
@@ -233,9 +235,16 @@ pub fn fit_measured(
             let c = normal_jumps(&network, opts.jump_samples);
             let grids: Vec<_> = sampling.patches.iter().map(|p| &p.points).collect();
             let [far] = surface_support_at(&grids, &data, [0.01 * diag]);
+            let points_p99 = open.then(|| {
+                deviation_from_patches(&network, &measured_sample, diag)
+                    .stats
+                    .absolute
+                    .p99
+            });
             let score = TrialScore {
                 samples_over_5_deg: c.samples_over_5_deg,
                 far_share: far.unsupported_fraction,
+                points_p99,
             };
             Some((score, sampling))
         };
