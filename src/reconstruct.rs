@@ -7,6 +7,7 @@
 //! with projection until the mesh is within the tolerance of the implicit -> deviation of the
 //! input points from the result (exact point-to-triangle distances).
 
+use crate::features::{SharpChoice, SharpMode};
 use crate::implicit::project::ProjectOptions;
 use crate::implicit::{FitOptions, FitStats, PouImplicit};
 use crate::mesh::{Mesh, Topology};
@@ -46,9 +47,11 @@ pub struct ReconstructOptions {
     /// Measure the deviation of the input points from the result (default true).
     pub measure_deviation: bool,
     /// Keep sharp edges: the input is segmented into smooth regions ([`crate::features`]) and
-    /// cells crossed by a crease get one function per region ([`crate::implicit::sharp`]);
-    /// without regions (an organic model) the result is as without (default false).
-    pub sharp: bool,
+    /// cells crossed by a crease get one function per region ([`crate::implicit::sharp`]):
+    /// `On` whenever there is more than one region, `Auto` (the default) when the input looks
+    /// machined ([`crate::features::sharp_choice`]), `Off` never. With a single region (an
+    /// organic model) the result is the same in every mode.
+    pub sharp: SharpMode,
 }
 
 impl Default for ReconstructOptions {
@@ -63,7 +66,7 @@ impl Default for ReconstructOptions {
             max_faces: 4_000_000,
             normal_neighbours: crate::normals::DEFAULT_NEIGHBOURS,
             measure_deviation: true,
-            sharp: false,
+            sharp: SharpMode::Auto,
         }
     }
 }
@@ -72,10 +75,14 @@ impl Default for ReconstructOptions {
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct Timings {
     pub normals: f64,
+    /// The segmentation into smooth regions (`sharp` other than off).
+    pub features: f64,
     pub fit: f64,
     pub polygonize: f64,
     pub relax: f64,
     pub refine: f64,
+    /// The split of the mesh on the creases (`sharp`).
+    pub creases: f64,
     pub deviation: f64,
     pub total: f64,
 }
@@ -108,8 +115,10 @@ pub struct ReconstructReport {
     pub euler_characteristic: i64,
     pub components: usize,
     pub deviation: Option<Deviation>,
-    /// The smooth regions the implicit was fitted with (`sharp`; `None` when off or when the
-    /// input has a single region).
+    /// Whether the sharp edges were kept, and why (`None` with `--sharp off`: not segmented).
+    pub sharp: Option<SharpChoice>,
+    /// The smooth regions the implicit was fitted with (`None` when the sharp edges were not
+    /// kept).
     pub features: Option<crate::features::SegmentStats>,
     /// The mesh's edges split at the creases (`sharp`).
     pub creases: Option<CreaseSplitReport>,
@@ -183,15 +192,18 @@ pub fn reconstruct(
     timings.normals = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let segmentation = if opts.sharp {
+    let (segmentation, sharp) = if opts.sharp == SharpMode::Off {
+        (None, None)
+    } else {
         progress("features", 0.1);
         let seg =
             crate::features::segment(input, &op, &crate::features::FeatureOptions::default())?;
-        seg.has_features().then_some(seg)
-    } else {
-        None
+        let choice = crate::features::sharp_choice::choose(opts.sharp, &seg.stats);
+        (choice.sharp.then_some(seg), Some(choice))
     };
+    timings.features = t.elapsed().as_secs_f64();
     progress("fit", 0.15);
+    let t = Instant::now();
     let f = match &segmentation {
         Some(seg) => {
             // The points keep their own normals: one-sided normals beside a convex crease
@@ -249,13 +261,19 @@ pub fn reconstruct(
         relax_iterations: 0,
         max_faces: opts.max_faces,
     };
+    // Sharp: the triangles across a crease count too; they keep the gap quantile high, and
+    // the extra level they cost puts the split points below closer together (without them
+    // make_parts' wedge.stl gets 99 k triangles instead of 1.5 M, but its crease p95 goes
+    // from 1.6e-4 to 9.9e-4 of the diagonal).
     let (mut mesh, refine_report) = refine(mesh, &f, &ropts, &proj);
+    let side_field = segmentation.as_ref().map(|seg| SharpField { seg, f: &f });
     timings.refine = t.elapsed().as_secs_f64();
     // Sharp: the triangles that cut across a crease split where its two faces meet.
-    let creases = segmentation.as_ref().map(|seg| {
-        let field = SharpField { seg, f: &f };
-        split_at_creases(&mut mesh, &field, &CreaseSplitOptions::default())
-    });
+    let t = Instant::now();
+    let creases = side_field
+        .as_ref()
+        .map(|field| split_at_creases(&mut mesh, field, &CreaseSplitOptions::default()));
+    timings.creases = t.elapsed().as_secs_f64();
     // Global orientation check: a closed result must enclose a positive volume (it would not if
     // the normals, and so the implicit's sign, came out inverted).
     let flipped_output = mesh.signed_volume() < 0.0;
@@ -299,6 +317,7 @@ pub fn reconstruct(
             + mesh.faces.len() as i64,
         components: topo.components.len(),
         deviation: dev,
+        sharp,
         features: segmentation.map(|s| s.stats),
         creases,
         timings,

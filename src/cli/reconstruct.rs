@@ -1,6 +1,7 @@
 //! `scansurf reconstruct INPUT -o OUT.(ply|obj|stl) [--resolution N] [--tolerance T] [--report R]`.
 
 use crate::error::{Error, Result};
+use crate::features::SharpMode;
 use crate::reconstruct::{reconstruct, ReconstructOptions};
 use std::path::PathBuf;
 
@@ -30,11 +31,14 @@ pub struct Args {
     /// Write PLY/STL as text.
     #[arg(long)]
     pub ascii: bool,
-    /// Keep sharp edges (machined parts): find the smooth regions and creases first (as
-    /// `scansurf features`) and fit one function per region in the cells a crease crosses.
-    /// Inputs with one smooth region (organic scans) come out as without it.
-    #[arg(long)]
-    pub sharp: bool,
+    /// Keep sharp edges: find the smooth regions and creases first (as `scansurf features`)
+    /// and fit one function per region in the cells a crease crosses. `auto`: when the input
+    /// looks machined (a quarter of its points outside its largest smooth region); `on`:
+    /// whenever it has creases (`--sharp` alone means `on`); `off`: round every edge. Inputs
+    /// with one smooth region (organic scans) come out the same in every mode.
+    #[arg(long, value_enum, default_value_t = SharpMode::Auto, num_args = 0..=1,
+          default_missing_value = "on", value_name = "on|off|auto")]
+    pub sharp: SharpMode,
 }
 
 pub fn run(a: Args, quiet: bool) -> Result<()> {
@@ -94,6 +98,10 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
             dev,
             report.timings.total
         );
+        if let Some(c) = report.sharp.as_ref().filter(|c| c.regions > 1) {
+            let kept = if c.sharp { "kept" } else { "rounded" };
+            eprintln!("sharp edges {kept}: {}", c.reason);
+        }
     }
     Ok(())
 }

@@ -17,6 +17,7 @@
 //! - [`lines`]: the polylines and corners, and the steps both kinds share;
 //! - [`export`]: PLY files of the creases and of the labelled points;
 //! - [`local_fit`]: the local quadratic height functions the segmentations use;
+//! - [`sharp_choice`]: whether a stage keeps the sharp edges (`--sharp on|off|auto`);
 //! - [`union_find`]: disjoint sets.
 //!
 //! A [`Segmentation`] holds each region's points with one-sided normals (normals beside a
@@ -35,6 +36,7 @@ pub mod local_fit;
 pub mod merge;
 pub mod segment_cloud;
 pub mod segment_mesh;
+pub mod sharp_choice;
 pub mod union_find;
 
 use crate::mesh::normals::vertex_normals;
@@ -48,6 +50,7 @@ pub use detect::{detect, DetectOptions, Features};
 pub use lines::Crease;
 pub use segment_cloud::{segment_cloud, CloudOptions};
 pub use segment_mesh::{segment_mesh, MeshOptions};
+pub use sharp_choice::{SharpChoice, SharpMode};
 
 /// Two regions that meet at a crease.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]

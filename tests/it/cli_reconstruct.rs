@@ -28,13 +28,15 @@ fn sharp_keeps_the_block_creases() {
             out.to_str().unwrap(),
             "--report",
             report.to_str().unwrap(),
-            "--sharp",
             "-q",
         ]);
         assert_eq!(code, 0, "{err}");
         let r: serde_json::Value =
             serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
         assert_eq!(r["closed_manifold"], true, "{input}");
+        // `--sharp auto`, the default, finds the part machined.
+        assert_eq!(r["sharp"]["requested"], "auto", "{input}");
+        assert_eq!(r["sharp"]["sharp"], true, "{input}: {}", r["sharp"]);
         assert!(
             f(&r, &["features", "regions"]) >= 10.0,
             "{input}: {}",
@@ -133,15 +135,17 @@ fn refuses_point_output_and_bad_input() {
     assert!(!out.exists());
 }
 
-/// An organic model has one smooth region (its horns are surface detail), so `--sharp` leaves
-/// the output as it is, byte for byte.
+/// An organic model has one smooth region (its horns are surface detail), so every `--sharp`
+/// mode (`auto` the default, `--sharp` alone meaning `on`) leaves the output as `off` makes
+/// it, byte for byte.
 #[test]
 fn sharp_leaves_an_organic_model_as_it_is() {
     let dir = tempfile::tempdir().unwrap();
     let spot = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/spot.obj");
     let mut outputs = Vec::new();
-    for extra in [&[][..], &["--sharp"][..]] {
-        let out = dir.path().join(format!("spot{}.ply", extra.len()));
+    let modes: [&[&str]; 4] = [&["--sharp", "off"], &[], &["--sharp"], &["--sharp", "auto"]];
+    for (k, extra) in modes.into_iter().enumerate() {
+        let out = dir.path().join(format!("spot{k}.ply"));
         let args = [
             &[
                 "reconstruct",
@@ -157,8 +161,11 @@ fn sharp_leaves_an_organic_model_as_it_is() {
         assert_eq!(code, 0, "{err}");
         outputs.push(std::fs::read(&out).unwrap());
     }
-    assert!(
-        outputs[0] == outputs[1],
-        "--sharp changed an organic model's mesh"
-    );
+    for (k, o) in outputs.iter().enumerate().skip(1) {
+        assert!(
+            *o == outputs[0],
+            "{:?} changed an organic model's mesh",
+            modes[k]
+        );
+    }
 }
