@@ -261,7 +261,14 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
             if network.closed { "closed" } else { "open" }
         )];
         crate::io::write_atomic(n, |w| {
-            crate::io::obj::write_quads(w, &network.vertices, &quads, &comments)
+            let regions = report
+                .net_regions
+                .as_ref()
+                .map(|r| crate::io::obj::QuadRegions {
+                    quad_region: &r.quad_region,
+                    crease_edges: &r.crease_edges,
+                });
+            crate::io::obj::write_quads(w, &network.vertices, &quads, &comments, regions)
         })?;
     }
     let pts = measured;

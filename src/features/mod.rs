@@ -16,6 +16,7 @@
 //! - [`crease_mesh`], [`crease_cloud`]: crease polylines and corners of each kind of input;
 //! - [`lines`]: the polylines and corners, and the steps both kinds share;
 //! - [`export`]: PLY files of the creases and of the labelled points;
+//! - [`net_regions`]: a patch network's quads labelled by region, its crease edges and nodes;
 //! - [`local_fit`]: the local quadratic height functions the segmentations use;
 //! - [`sharp_choice`]: whether a stage keeps the sharp edges (`--sharp on|off|auto`);
 //! - [`union_find`]: disjoint sets.
@@ -34,6 +35,7 @@ pub mod folds;
 pub mod lines;
 pub mod local_fit;
 pub mod merge;
+pub mod net_regions;
 pub mod segment_cloud;
 pub mod segment_mesh;
 pub mod sharp_choice;

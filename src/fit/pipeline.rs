@@ -144,6 +144,9 @@ pub struct FitReport {
     /// The input's sharp features (`fit --features`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub features: Option<crate::features::detect::FeatureSummary>,
+    /// The patches labelled by the smooth regions of `features` (`fit --features`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub net_regions: Option<crate::features::net_regions::NetRegions>,
     pub timings: FitTimings,
 }
 
@@ -192,7 +195,7 @@ pub fn fit_measured(
             let t = Instant::now();
             let found = crate::features::detect::detect_oriented(input, Some(&op), fo)?;
             timings.features = t.elapsed().as_secs_f64();
-            Some(found.summary())
+            Some(found)
         }
         None => None,
     };
@@ -391,7 +394,10 @@ pub fn fit_measured(
         support_far,
         hole_fill: None,
         step: None,
-        features,
+        net_regions: features.as_ref().map(|found| {
+            crate::features::net_regions::label_network(&network, &network.quads(), found)
+        }),
+        features: features.map(|found| found.summary()),
         timings,
     };
     Ok((network, report))

@@ -175,12 +175,14 @@ pub fn write(w: &mut dyn Write, mesh: &Mesh) -> std::io::Result<()> {
 }
 
 /// Writes a quad net as OBJ: a `#` line per entry of `comments`, `v` lines (full precision),
-/// one `f` line of four (1-based) vertices per quad.
+/// one `f` line of four (1-based) vertices per quad; with `regions`, the quads in groups by
+/// region and the crease edges as lines ([`QuadRegions`]).
 pub fn write_quads(
     w: &mut dyn Write,
     vertices: &[nalgebra::Point3<f64>],
     quads: &[[u32; 4]],
     comments: &[String],
+    regions: Option<QuadRegions<'_>>,
 ) -> std::io::Result<()> {
     writeln!(w, "# written by scansurf {}", env!("CARGO_PKG_VERSION"))?;
     for c in comments {
@@ -189,11 +191,37 @@ pub fn write_quads(
     for p in vertices {
         writeln!(w, "v {:?} {:?} {:?}", p.x, p.y, p.z)?;
     }
-    for q in quads {
+    let mut group = None;
+    for (k, q) in quads.iter().enumerate() {
+        if let Some(r) = regions.and_then(|r| r.quad_region.get(k)) {
+            if group != Some(*r) {
+                if *r == u32::MAX {
+                    writeln!(w, "g unlabelled")?;
+                } else {
+                    writeln!(w, "g region_{r}")?;
+                }
+                group = Some(*r);
+            }
+        }
         let [a, b, c, d] = q.map(|k| k + 1);
         writeln!(w, "f {a} {b} {c} {d}")?;
     }
+    if let Some(r) = regions.filter(|r| !r.crease_edges.is_empty()) {
+        writeln!(w, "g creases")?;
+        for e in r.crease_edges {
+            writeln!(w, "l {} {}", e[0] + 1, e[1] + 1)?;
+        }
+    }
     Ok(())
+}
+
+/// Region labels for [`write_quads`]: per quad (`u32::MAX` for none), written as OBJ groups
+/// `g region_K` (the faces keep their order, so a group may open more than once), and the
+/// crease edges between regions, written as lines `l a b` in the group `creases`.
+#[derive(Debug, Clone, Copy)]
+pub struct QuadRegions<'a> {
+    pub quad_region: &'a [u32],
+    pub crease_edges: &'a [[u32; 2]],
 }
 
 #[cfg(test)]

@@ -37,6 +37,7 @@ fn block_open() -> Option<&'static OpenFit> {
                 dir.join("b.png").to_str().unwrap(),
                 "--net",
                 dir.join("b-net.obj").to_str().unwrap(),
+                "--features",
             ],
         );
         OpenFit { dir, input, report }
@@ -386,6 +387,50 @@ fn slow_block_quad_net_is_written_as_obj() {
     let boundary = uses.values().filter(|&&n| n == 1).count();
     assert_eq!(boundary as f64, f(&fit.report, &["free_edges"]));
     assert!(uses.values().all(|&n| n <= 2));
+}
+
+/// `fit --features --net`: the net's quads in groups by smooth region and the edges between
+/// regions as lines; the block seen from above has its top, four sides, the pocket's walls
+/// and floor and the hole's wall as regions, and every crease line is an edge between two
+/// groups.
+#[test]
+fn slow_block_net_is_labelled_by_region() {
+    let Some(fit) = block_open() else {
+        return;
+    };
+    let r = &fit.report["net_regions"];
+    assert!(f(r, &["regions"]) >= 6.0, "{r}");
+    assert_eq!(f(r, &["unlabelled_quads"]), 0.0, "{r}");
+    let text = std::fs::read_to_string(fit.dir.join("b-net.obj")).unwrap();
+    let mut group = String::new();
+    let mut edge_groups: std::collections::HashMap<(usize, usize), Vec<String>> =
+        Default::default();
+    let mut lines = Vec::new();
+    for l in text.lines() {
+        if let Some(g) = l.strip_prefix("g ") {
+            group = g.to_string();
+        } else if let Some(q) = l.strip_prefix("f ") {
+            assert!(group.starts_with("region_"), "{group}");
+            let q: Vec<usize> = q.split_whitespace().map(|k| k.parse().unwrap()).collect();
+            for k in 0..4 {
+                let (a, b) = (q[k], q[(k + 1) % 4]);
+                edge_groups
+                    .entry((a.min(b), a.max(b)))
+                    .or_default()
+                    .push(group.clone());
+            }
+        } else if let Some(e) = l.strip_prefix("l ") {
+            assert_eq!(group, "creases");
+            let e: Vec<usize> = e.split_whitespace().map(|k| k.parse().unwrap()).collect();
+            lines.push((e[0], e[1]));
+        }
+    }
+    assert_eq!(lines.len() as f64, f(r, &["crease_edges_count"]), "{r}");
+    assert!(lines.len() > 50, "{r}");
+    for e in &lines {
+        let g = &edge_groups[e];
+        assert!(g.len() == 2 && g[0] != g[1], "{e:?}: {g:?}");
+    }
 }
 
 /// A closed input: `auto` keeps it closed, byte for byte what `--close smooth` writes.
