@@ -21,8 +21,9 @@ use std::collections::{BTreeSet, HashMap};
 /// Labelled points consulted per quad.
 pub const VOTERS: usize = 8;
 
-/// Region of a quad no labelled point near it decided.
-pub const NO_REGION: u32 = u32::MAX;
+/// Region of a quad no labelled point near it decided: the segmentation's own label of a
+/// point no region took.
+pub const NO_REGION: u32 = UNLABELLED;
 
 /// The labels and what they show (the report's `net_regions`).
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
@@ -44,13 +45,9 @@ pub struct NetRegions {
     pub staircase_quads: usize,
 }
 
-/// Labels the quads of `network` (corner nodes `quads`, from [`PatchNetwork::quads`]) by the
-/// regions of `features`.
-pub fn label_network(
-    network: &PatchNetwork,
-    quads: &[[u32; 4]],
-    features: &Features,
-) -> NetRegions {
+/// Labels the quads of `network` (their corner nodes as [`PatchNetwork::quads`] gives them)
+/// by the regions of `features`.
+pub fn label_network(network: &PatchNetwork, features: &Features) -> NetRegions {
     let labelled: Vec<(Point3<f64>, u32)> = features
         .points
         .iter()
@@ -73,7 +70,7 @@ pub fn label_network(
             majority(tree.knn(&c, VOTERS).iter().map(|&(i, _)| labelled[i].1))
         })
         .collect();
-    from_labels(quads, quad_region, features.regions)
+    from_labels(&network.quads(), quad_region, features.regions)
 }
 
 /// The most frequent of `labels` (the smallest on a tie); [`NO_REGION`] for none.

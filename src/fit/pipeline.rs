@@ -394,9 +394,9 @@ pub fn fit_measured(
         support_far,
         hole_fill: None,
         step: None,
-        net_regions: features.as_ref().map(|found| {
-            crate::features::net_regions::label_network(&network, &network.quads(), found)
-        }),
+        net_regions: features
+            .as_ref()
+            .map(|found| crate::features::net_regions::label_network(&network, found)),
         features: features.map(|found| found.summary()),
         timings,
     };

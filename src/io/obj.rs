@@ -195,7 +195,7 @@ pub fn write_quads(
     for (k, q) in quads.iter().enumerate() {
         if let Some(r) = regions.and_then(|r| r.quad_region.get(k)) {
             if group != Some(*r) {
-                if *r == u32::MAX {
+                if *r == crate::features::net_regions::NO_REGION {
                     writeln!(w, "g unlabelled")?;
                 } else {
                     writeln!(w, "g region_{r}")?;
@@ -215,8 +215,9 @@ pub fn write_quads(
     Ok(())
 }
 
-/// Region labels for [`write_quads`]: per quad (`u32::MAX` for none), written as OBJ groups
-/// `g region_K` (the faces keep their order, so a group may open more than once), and the
+/// Region labels for [`write_quads`]: per quad
+/// ([`crate::features::net_regions::NO_REGION`] for none, group `unlabelled`), written as OBJ
+/// groups `g region_K` (the faces keep their order, so a group may open more than once), and the
 /// crease edges between regions, written as lines `l a b` in the group `creases`.
 #[derive(Debug, Clone, Copy)]
 pub struct QuadRegions<'a> {
