@@ -7,6 +7,7 @@
 //! with projection until the mesh is within the tolerance of the implicit -> deviation of the
 //! input points from the result (exact point-to-triangle distances).
 
+use crate::features::sharp_field::SharpField;
 use crate::features::{SharpChoice, SharpMode};
 use crate::implicit::project::ProjectOptions;
 use crate::implicit::{FitOptions, FitStats, PouImplicit};
@@ -14,9 +15,7 @@ use crate::mesh::{Mesh, Topology};
 use crate::metrics::{deviation, Deviation};
 use crate::normals::{oriented_points, NormalSource};
 use crate::polygonize::components::keep_supported_components;
-use crate::polygonize::crease_split::{
-    split_at_creases, CreaseSplitOptions, CreaseSplitReport, SideField,
-};
+use crate::polygonize::crease_split::{split_at_creases, CreaseSplitOptions, CreaseSplitReport};
 use crate::polygonize::{marching_cubes, refine, relax, RefineOptions, RefineReport};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -139,34 +138,6 @@ pub fn mean_spacing(points: &[nalgebra::Point3<f64>], kd: &crate::spatial::KdTre
         .map(|p| kd.knn(p, K + 1).last().map_or(0.0, |x| x.1))
         .collect();
     s.iter().sum::<f64>() / s.len() as f64 / (K as f64 / std::f64::consts::PI).sqrt()
-}
-
-/// The sharp implicit as [`split_at_creases`] sees it: of the regions among the input points
-/// nearest to x, the one whose surface passes nearest to x (the labels of the input points
-/// beside a crease are a point spacing uncertain, the sides' surfaces are not), and the
-/// implicit on that region's side of every crease.
-struct SharpField<'a> {
-    seg: &'a crate::features::Segmentation,
-    f: &'a PouImplicit,
-}
-
-/// Labelled input points looked at by [`SharpField::region`].
-const REGION_VOTERS: usize = 16;
-
-impl SideField for SharpField<'_> {
-    fn region(&self, x: &nalgebra::Point3<f64>) -> u32 {
-        let near = self.seg.regions_near(x, REGION_VOTERS);
-        if near.len() == 1 {
-            return near[0].0;
-        }
-        near.iter()
-            .map(|&(r, _)| (r, self.f.side_value_and_gradient(r, x).0.abs()))
-            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
-            .map_or_else(|| self.seg.region_near(x), |(r, _)| r)
-    }
-    fn side(&self, region: u32, x: &nalgebra::Point3<f64>) -> (f64, nalgebra::Vector3<f64>) {
-        self.f.side_value_and_gradient(region, x)
-    }
 }
 
 /// Reconstructs a closed mesh from a mesh (its referenced vertices and face normals) or a point

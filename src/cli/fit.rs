@@ -75,6 +75,15 @@ pub struct Args {
     /// do not follow them yet.
     #[arg(long)]
     pub features: bool,
+    /// Keep sharp edges (work in progress, issue 36): find the smooth regions and creases first
+    /// (as `scansurf features`), fit one function per region in the cells a crease crosses, and
+    /// put the quad net's nodes on the creases and corners (the report's `crease_nodes`;
+    /// `--net` shows the net by region). The patches still join smoothly across the creases.
+    /// `on` whenever the input has creases (`--sharp` alone means `on`), `auto` when it looks
+    /// machined (as `reconstruct`), `off` (default) rounds every edge.
+    #[arg(long, value_enum, default_value_t = crate::features::SharpMode::Off, num_args = 0..=1,
+          default_missing_value = "on", value_name = "on|off|auto")]
+    pub sharp: crate::features::SharpMode,
     /// What to do where the data stop (a part scanned on a table has no underside): `open`
     /// fits only the scanned surface (an open shell); `smooth` closes every opening with the
     /// implicit's smooth extension (a solid); `auto` closes when the data enclose a volume (at
@@ -209,6 +218,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         apron_unit: (extend_surfaces == ExtendSurfaces::Auto).then_some(unit),
         features: a.features.then(crate::features::DetectOptions::default),
         close,
+        sharp: a.sharp,
         size_given: a.patches.is_some() || a.patch_size.is_some(),
         ..FitOptions::default()
     };

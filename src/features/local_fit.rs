@@ -63,6 +63,11 @@ impl LocalQuadric {
         self.poly.value(x)
     }
 
+    /// The approximate signed distance and its gradient at `x`.
+    pub fn value_and_gradient(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+        self.poly.value_and_gradient(x)
+    }
+
     /// Unit normal of the fitted surface above `x`, on the side of the frame's normal.
     pub fn normal(&self, x: &Point3<f64>) -> Vector3<f64> {
         self.poly

@@ -28,6 +28,7 @@
 
 pub mod crease_cloud;
 pub mod crease_mesh;
+pub mod data_sides;
 pub mod details;
 pub mod detect;
 pub mod export;
@@ -39,6 +40,7 @@ pub mod net_regions;
 pub mod segment_cloud;
 pub mod segment_mesh;
 pub mod sharp_choice;
+pub mod sharp_field;
 pub mod union_find;
 
 use crate::mesh::normals::vertex_normals;
@@ -128,6 +130,11 @@ impl Segmentation {
     /// The labelled points and their regions.
     pub fn labelled(&self) -> (&[Point3<f64>], &[u32]) {
         (&self.label_points, &self.label_of)
+    }
+
+    /// The tree of the labelled points.
+    pub fn label_tree(&self) -> &KdTree {
+        &self.label_kd
     }
 
     /// Region of the labelled point nearest to `x`.

@@ -52,6 +52,13 @@ pub struct FitOptions {
     /// What to do with the openings of the data (`--close`, default `auto`;
     /// [`crate::openings`]).
     pub close: crate::openings::Close,
+    /// Keep the sharp edges (`--sharp`, default `off` while the crease-aligned net is being
+    /// built, issue 36): the input is segmented into smooth regions, the implicit fitted with
+    /// one function per region in the cells a crease crosses ([`crate::implicit::sharp`]),
+    /// and the net's nodes put on the creases and corners
+    /// ([`crate::polygonize::crease_nodes`]). `Auto` decides as `reconstruct` does
+    /// ([`crate::features::sharp_choice`]).
+    pub sharp: crate::features::SharpMode,
     /// Whether the user gave the patch count or size (`--patches`, `--patch-size`). When not,
     /// an open fit whose net misses parts of the data thinner than a patch is made again with
     /// more patches ([`crate::openings::coverage`]); when given, the report only says so.
@@ -63,6 +70,10 @@ pub struct FitOptions {
 /// samples a cubic B-spline on its uniform 44-line grid (more spans give 3 lines per span,
 /// too close together on a patch that small).
 pub const APRON_MAX_INTERVALS: usize = 12;
+
+/// Radius, in voxels, of the data fitted around a crease node for the sides it is put between
+/// (`--sharp`; [`crate::features::data_sides`]): a node is up to a voxel from its crease.
+const DATA_SIDES_RADIUS: f64 = 1.5;
 
 /// Sample intervals per side of the trial patches that rank the grid placements.
 const TRIAL_INTERVALS: usize = 4;
@@ -78,6 +89,7 @@ impl Default for FitOptions {
             apron_unit: Some(crate::export::LengthUnit::Millimetre),
             features: None,
             close: crate::openings::Close::Auto,
+            sharp: crate::features::SharpMode::Off,
             size_given: false,
         }
     }
@@ -87,10 +99,12 @@ impl Default for FitOptions {
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct FitTimings {
     pub normals: f64,
-    /// Sharp features (`--features`; 0 without).
+    /// Sharp features (`--features`) and the segmentation of `--sharp`; 0 without.
     pub features: f64,
     pub implicit: f64,
     pub net: f64,
+    /// The net's nodes put on the creases (`--sharp`; 0 without).
+    pub creases: f64,
     pub sampling: f64,
     pub patches: f64,
     pub deviation: f64,
@@ -144,7 +158,14 @@ pub struct FitReport {
     /// The input's sharp features (`fit --features`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub features: Option<crate::features::detect::FeatureSummary>,
-    /// The patches labelled by the smooth regions of `features` (`fit --features`).
+    /// Whether the sharp edges were kept, and why (`None` with `--sharp off`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sharp: Option<crate::features::SharpChoice>,
+    /// The net's nodes put on the creases and corners (`--sharp` when kept).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crease_nodes: Option<crate::polygonize::crease_nodes::CreaseNodesReport>,
+    /// The patches labelled by the smooth regions: of `features` (`fit --features`), or those
+    /// the net's nodes were put between (`--sharp`, when kept).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub net_regions: Option<crate::features::net_regions::NetRegions>,
     pub timings: FitTimings,
@@ -200,12 +221,31 @@ pub fn fit_measured(
         None => None,
     };
 
+    // `--sharp`: the smooth regions, and whether their creases are kept.
+    let (segmentation, sharp) = if opts.sharp == crate::features::SharpMode::Off {
+        (None, None)
+    } else {
+        progress("features", 0.04);
+        let t = Instant::now();
+        let seg =
+            crate::features::segment(input, &op, &crate::features::FeatureOptions::default())?;
+        let choice = crate::features::sharp_choice::choose(opts.sharp, &seg.stats);
+        timings.features += t.elapsed().as_secs_f64();
+        (choice.sharp.then_some(seg), Some(choice))
+    };
+    let region_labels = segmentation.as_ref().map(|seg| seg.labels_of(&op.points));
+
     progress("implicit", 0.05);
     let t = Instant::now();
     let fit_implicit = |open: bool| {
         let mut implicit_opts = opts.implicit.clone();
         implicit_opts.bridge_openings &= !open;
-        PouImplicit::fit(&op.points, &op.normals, &implicit_opts)
+        PouImplicit::fit_with_regions(
+            &op.points,
+            &op.normals,
+            region_labels.as_deref(),
+            &implicit_opts,
+        )
     };
     let f = fit_implicit(open)?;
     timings.implicit = t.elapsed().as_secs_f64();
@@ -277,7 +317,7 @@ pub fn fit_measured(
     let mut reopened = closure.clone();
     // The open implicit's time, counted under `implicit`, not `net`.
     let mut refit_secs = 0.0;
-    let (f, (net, net_report, trial_sampling, coverage)) = match because {
+    let (f, (mut net, mut net_report, mut trial_sampling, coverage)) = match because {
         Some(because) if reopened.reopen(&because) => {
             progress("implicit", 0.05);
             let t_reopen = Instant::now();
@@ -312,6 +352,39 @@ pub fn fit_measured(
     closure.support_radius = crate::openings::SUPPORT_RADIUS * net_report.h;
     closure.trim = net_report.trim.clone();
     closure.rim = net_report.rim.clone();
+
+    // `--sharp`: the net's nodes on the creases and corners.
+    let crease_net = match &segmentation {
+        Some(seg) => {
+            progress("creases", 0.45);
+            let t = Instant::now();
+            let field = crate::features::sharp_field::SharpField { seg, f: &f };
+            let smooth = crate::polygonize::net_smooth::SmoothOptions::new(diag, net_report.h);
+            let data = crate::features::data_sides::DataSides {
+                seg,
+                radius: DATA_SIDES_RADIUS * net_report.h,
+            };
+            let placed = crate::polygonize::crease_nodes::place_on_creases(
+                &mut net,
+                &f,
+                &field,
+                Some(&data),
+                &smooth,
+                &crate::polygonize::crease_nodes::CreaseNodeOptions::default(),
+            )?;
+            // The trial patches were sampled on the net before its nodes moved.
+            trial_sampling = None;
+            // The staircases' quads collapsed: the counts change.
+            net_report.patches = net.quads.len();
+            net_report.nodes = net.nodes.len();
+            net_report.edges = net.edges.len();
+            net_report.euler_characteristic = net.euler_characteristic();
+            net_report.valence_histogram = net.valence_histogram();
+            timings.creases = t.elapsed().as_secs_f64();
+            Some((placed, seg.regions.len()))
+        }
+        None => None,
+    };
 
     progress("sampling", 0.5);
     let t = Instant::now();
@@ -394,9 +467,18 @@ pub fn fit_measured(
         support_far,
         hole_fill: None,
         step: None,
-        net_regions: features
-            .as_ref()
-            .map(|found| crate::features::net_regions::label_network(&network, found)),
+        net_regions: match &crease_net {
+            Some((c, regions)) => Some(crate::features::net_regions::from_labels(
+                &network.quads(),
+                c.quad_region.clone(),
+                *regions,
+            )),
+            None => features
+                .as_ref()
+                .map(|found| crate::features::net_regions::label_network(&network, found)),
+        },
+        sharp,
+        crease_nodes: crease_net.map(|(c, _)| c.report),
         features: features.map(|found| found.summary()),
         timings,
     };

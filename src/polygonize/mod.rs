@@ -10,6 +10,8 @@
 //! target number of patches.
 
 pub mod components;
+pub mod crease_collapse;
+pub mod crease_nodes;
 pub mod crease_split;
 pub mod marching_cubes;
 pub mod relax;

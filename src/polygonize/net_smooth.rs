@@ -102,25 +102,89 @@ pub fn project_and_smooth<I: Implicit + ?Sized>(
     let (nodes, normals) =
         project_on_lines(f, &net.nodes, &net_normals, 1.5 * opt.h, &newton, None)?;
     net.nodes = nodes;
-    let mut state = State::new(net, f, normals, opt);
+    let state = State::new(net, f, normals, opt);
+    Ok(relax_on_surface(net, f, opt, state, None))
+}
+
+/// What the relaxation must respect besides the surface: nodes that must not move and nodes
+/// whose moves must stay on a curve of the surface (a crease) or on one side of it.
+pub trait NodeConstraint: Sync {
+    /// Whether node `i` keeps its place.
+    fn pinned(&self, i: usize) -> bool;
+    /// Where node `i`, relaxed from `old` to `new` (both on the surface), goes instead: `new`
+    /// when it is free there, a point of its curve near `new`, `old` when neither will do.
+    fn constrain(&self, i: usize, old: &Point3<f64>, new: &Point3<f64>) -> Point3<f64>;
+}
+
+/// Relaxes a net whose nodes already lie on f = 0, as [`project_and_smooth`] does after its
+/// projection, with `constraint` on the nodes' moves (the boundary of an open net stays
+/// pinned as well).
+pub fn relax_constrained<I: Implicit + ?Sized>(
+    net: &mut QuadNet,
+    f: &I,
+    opt: &SmoothOptions,
+    constraint: &dyn NodeConstraint,
+) -> Result<SmoothReport> {
+    if !(opt.h > 0.0 && opt.scale > 0.0 && opt.step > 0.0 && opt.step <= 1.0) {
+        return Err(Error::InvalidOption(
+            "smoothing needs positive h and scale and a step in (0, 1]".into(),
+        ));
+    }
+    let normals = super::net_quality::node_normals(f, &net.nodes);
+    let state = State::new(net, f, normals, opt);
+    Ok(relax_on_surface(net, f, opt, state, Some(constraint)))
+}
+
+/// The relaxation sweeps of [`project_and_smooth`] from nodes on the surface with unit
+/// normals `state`; the best net seen is kept.
+fn relax_on_surface<I: Implicit + ?Sized>(
+    net: &mut QuadNet,
+    f: &I,
+    opt: &SmoothOptions,
+    mut state: State,
+    constraint: Option<&dyn NodeConstraint>,
+) -> SmoothReport {
+    let newton = NewtonOptions::new(opt.scale, 0.5 * opt.h);
     let quality = |net: &QuadNet, st: &State| quality_with(net, &st.quad_n, &[0.0]);
     let projected = quality(net, &state);
     let mut best = (projected, net.nodes.clone());
     let mut since = 0;
     let mut iterations = 0;
-    let pinned = net.boundary_nodes();
+    let mut pinned = net.boundary_nodes();
+    if let Some(c) = constraint {
+        for (i, p) in pinned.iter_mut().enumerate() {
+            *p |= c.pinned(i);
+        }
+    }
     for _ in 0..opt.max_iterations {
         iterations += 1;
         let moved = relax_step(net, &state.node_n, &pinned, opt.step);
         // A node that cannot be put back on the surface keeps its place.
-        let (proj, normals) = project_on_lines(
+        let projected_moves = project_on_lines(
             f,
             &moved,
             &state.node_n,
             0.5 * opt.h,
             &newton,
             Some((&net.nodes, &state.node_n)),
-        )?;
+        );
+        let Ok((mut proj, mut normals)) = projected_moves else {
+            break;
+        };
+        if let Some(c) = constraint {
+            let fixed: Vec<(usize, Point3<f64>)> = (0..proj.len())
+                .into_par_iter()
+                .filter(|&i| !pinned[i])
+                .filter_map(|i| {
+                    let q = c.constrain(i, &net.nodes[i], &proj[i]);
+                    (q != proj[i]).then_some((i, q))
+                })
+                .collect();
+            for (i, q) in fixed {
+                proj[i] = q;
+                normals[i] = f.gradient(&q).try_normalize(0.0).unwrap_or(state.node_n[i]);
+            }
+        }
         state = keep_unfolded(net, proj, normals, &state, f, opt);
         let q = quality(net, &state);
         if better(&q, &best.0) {
@@ -142,11 +206,11 @@ pub fn project_and_smooth<I: Implicit + ?Sized>(
         q.max_residual = residuals.iter().fold(0.0, |a: f64, &b| a.max(b));
         q
     };
-    Ok(SmoothReport {
+    SmoothReport {
         projected: fix(projected),
         smoothed: fix(best.0),
         iterations,
-    })
+    }
 }
 
 /// Unit normals at the nodes and at the quad centres.

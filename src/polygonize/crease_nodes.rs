@@ -1,0 +1,462 @@
+//! The quad net's nodes put on the creases and corners of a sharp implicit (`fit --sharp`;
+//! issue 36 item 1), so that the net has a connected path of edges along every crease and a
+//! node on every corner.
+//!
+//! The voxel net's nodes are voxel corners projected onto f = 0 and relaxed there
+//! ([`super::net_smooth`]); nothing puts them on a part's edges, so a crease runs through the
+//! middle of quads and the patches round it off. On the sharp implicit
+//! ([`crate::implicit::sharp`], one function per side in the cells a crease crosses):
+//!
+//! 1. **Quad regions.** Each quad takes the region of its centroid: of the regions near it,
+//!    the one whose surface passes nearest ([`LocalSides::region`], the surfaces fitted to
+//!    the data, else [`SideField::region`]). Across a concave crease the voxel net's quads cut
+//!    the corner; the centroid of such a quad lies nearer the side whose nodes are farther
+//!    from the crease, so the quad joins that side and the crease nodes are the nearer ones. A quad whose label differs
+//!    from at least three of its edge neighbours' common label takes theirs (label noise
+//!    beside a crease), round after round until none changes (at most [`RELABEL_ROUNDS`]).
+//!    Then, when asked ([`CreaseNodeOptions::collapse_staircases`], off by default), the
+//!    staircase a crease at an angle to the grid makes is collapsed
+//!    ([`super::crease_collapse`]), so that no quad has three corners on one crease.
+//! 2. **Node roles.** A node whose quads carry one region is a face node, two a crease node,
+//!    three or more a corner node: the rank (1, 2, 3) of dual contouring's quadric error
+//!    function at the node (Ju, Losasso, Schaefer and Warren 2002), read off the labels rather
+//!    than off the singular values of the crossings' normals, which beside a crease rounded by
+//!    noise are not clearly rank 2.
+//! 3. **Placement.** A crease node between regions A and B goes to the nearest point of the
+//!    crease f_A = f_B = 0, a corner node to the point where its three regions' surfaces meet
+//!    ([`meet_point`]). The sides f_A, f_B, f_C are the regions' surfaces fitted to the data
+//!    around the node ([`LocalSides`], e.g. [`crate::features::data_sides`]) when the caller
+//!    has them and they can be fitted there, else the sharp implicit's own
+//!    ([`SideField::side`], which differ only in its sharp cells). The iteration is Gauss-Newton with the minimum-norm step x <- x - J^+ r, r = (f_A(x),
+//!    f_B(x)[, f_C(x)]), J the rows grad f_A, grad f_B[, grad f_C]. Each step minimizes the QEF
+//!    sum_k (n_k . (y - x) + f_k(x))^2 of the sides' tangent planes at x (with |grad f_k| = 1
+//!    its terms are the squared distances to those planes) with the least move, so the
+//!    iteration ends on the crease point or corner nearest to the node. A corner of more than
+//!    three regions takes the three with the most quads at the node. The node keeps its place
+//!    when the iteration fails (the sides meet at under 6 degrees: a smooth join, not a
+//!    crease) or moves it more than [`CreaseNodeOptions::max_move`] voxels.
+//! 4. **No folds.** Of a quad that the placements flip or degenerate (and was fine before), the
+//!    placed corner that moved most goes back, round after round.
+//! 5. **Constrained relaxation** ([`relax_constrained`]): crease nodes slide along their
+//!    crease (the relaxed position snapped back onto it), corners stay, and a face node next to
+//!    a crease may not cross it (a move to where another region's surface passes nearer is
+//!    undone).
+
+use super::crease_collapse::{collapse_staircases, LabelledQuads};
+use super::crease_split::{meet_point, CreaseSplitOptions, SideField};
+use super::net_quality::folded_quads;
+use super::net_smooth::{relax_constrained, NodeConstraint, SmoothOptions, SmoothReport};
+use super::newton::{project, NewtonOptions};
+use super::quad_net::QuadNet;
+use crate::implicit::Implicit;
+use crate::Result;
+use nalgebra::Point3;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+
+/// Most rounds of the quad relabelling (step 1).
+pub const RELABEL_ROUNDS: usize = 4;
+
+/// Options of [`place_on_creases`].
+#[derive(Debug, Clone, Copy)]
+pub struct CreaseNodeOptions {
+    /// Largest move of a node onto its crease or corner, in voxels (default 1).
+    pub max_move: f64,
+    /// The crease point iteration ([`meet_point`]).
+    pub meet: CreaseSplitOptions,
+    /// Collapse the quads of the staircase a crease at an angle to the grid makes
+    /// ([`super::crease_collapse`]; default false: on make_parts' block it folds quads and
+    /// leaves more crease nodes unplaced, crease p95 9.5e-3 -> 2.6e-2 of the diagonal).
+    pub collapse_staircases: bool,
+}
+
+impl Default for CreaseNodeOptions {
+    fn default() -> Self {
+        CreaseNodeOptions {
+            max_move: 1.0,
+            meet: CreaseSplitOptions::default(),
+            collapse_staircases: false,
+        }
+    }
+}
+
+/// The regions' surfaces fitted to the data around a point (the sides [`meet_point`] puts a
+/// node between; module doc, step 3).
+pub trait LocalSides: Sync {
+    /// The surfaces of `regions` around `x`, or `None` when one of them cannot be fitted there.
+    fn near(&self, x: &Point3<f64>, regions: &[u32]) -> Option<Box<dyn SideField + Send + Sync>>;
+    /// The region whose surface passes nearest to `x`, or `None` when none can be fitted.
+    fn region(&self, x: &Point3<f64>) -> Option<u32>;
+}
+
+/// What a node of the net is, by the regions of its quads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NodeRole {
+    /// Inside one region.
+    Face(u32),
+    /// On the crease between two regions (lower first).
+    Crease([u32; 2]),
+    /// Where three regions meet (the three with the most quads at the node, sorted).
+    Corner([u32; 3]),
+}
+
+/// What [`place_on_creases`] did (the report's `crease_nodes`).
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct CreaseNodesReport {
+    /// Quads whose centroid's region was replaced by their neighbours' (step 1).
+    pub relabelled_quads: usize,
+    /// Quads of the staircases collapsed (step 1b).
+    pub collapsed_quads: usize,
+    /// Nodes between two regions, and of them those put on the crease.
+    pub crease_nodes: usize,
+    pub placed_crease_nodes: usize,
+    /// Nodes where three or more regions meet, and of them those put on the corner.
+    pub corner_nodes: usize,
+    pub placed_corner_nodes: usize,
+    /// Placed nodes whose sides were fitted to the data around them ([`LocalSides`]); the
+    /// others were put between the sharp implicit's sides.
+    pub placed_on_data: usize,
+    /// Placements undone because they folded a quad.
+    pub undone_for_folds: usize,
+    /// Largest move of a kept placement, in voxels.
+    pub max_move: f64,
+    /// Net quality before and after the constrained relaxation.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub smoothing: Option<SmoothReport>,
+}
+
+/// The net's regions and nodes' roles after [`place_on_creases`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct CreaseNet {
+    /// Region of each quad.
+    pub quad_region: Vec<u32>,
+    /// Role of each node.
+    pub roles: Vec<NodeRole>,
+    /// Whether each node was put on its crease or corner (face nodes: false).
+    pub placed: Vec<bool>,
+    pub report: CreaseNodesReport,
+}
+
+/// Labels the quads of `net` by region, puts its crease and corner nodes on the creases and
+/// corners of `field`, and relaxes it under those constraints (module doc). `f` is the
+/// implicit the net lies on (the sharp one), `smooth` the relaxation's options (its `h` the
+/// voxel edge).
+pub fn place_on_creases<I: Implicit + ?Sized>(
+    net: &mut QuadNet,
+    f: &I,
+    field: &dyn SideField,
+    data: Option<&dyn LocalSides>,
+    smooth: &SmoothOptions,
+    opts: &CreaseNodeOptions,
+) -> Result<CreaseNet> {
+    let h = smooth.h;
+    let region = |x: &Point3<f64>| {
+        data.and_then(|d| d.region(x))
+            .unwrap_or_else(|| field.region(x))
+    };
+    let (mut quad_region, relabelled_quads) = quad_regions(net, &region);
+    let mut collapsed_quads = 0;
+    if opts.collapse_staircases {
+        (collapsed_quads, quad_region) = collapse(net, f, quad_region, smooth);
+    }
+    let roles = node_roles(net, &quad_region);
+    let mut report = CreaseNodesReport {
+        relabelled_quads,
+        collapsed_quads,
+        crease_nodes: count(&roles, |r| matches!(r, NodeRole::Crease(_))),
+        corner_nodes: count(&roles, |r| matches!(r, NodeRole::Corner(_))),
+        ..Default::default()
+    };
+
+    // Step 3: placement, on the data's sides when they can be fitted, else the implicit's.
+    let placements: Vec<Option<(Point3<f64>, Sides)>> = (0..net.nodes.len())
+        .into_par_iter()
+        .map(|i| {
+            let p = net.nodes[i];
+            let regions: &[u32] = match &roles[i] {
+                NodeRole::Face(_) => return None,
+                NodeRole::Crease(s) => s,
+                NodeRole::Corner(s) => s,
+            };
+            let near = |q: &Point3<f64>| (q - p).norm() <= opts.max_move * h;
+            if let Some(sides) = data.and_then(|d| d.near(&p, regions)) {
+                if let Some(q) = meet_point(&*sides, regions, p, h, &opts.meet).filter(near) {
+                    return Some((q, Sides::Data(sides)));
+                }
+            }
+            meet_point(field, regions, p, h, &opts.meet)
+                .filter(near)
+                .map(|q| (q, Sides::Implicit))
+        })
+        .collect();
+    let targets: Vec<Option<Point3<f64>>> =
+        placements.iter().map(|t| t.as_ref().map(|x| x.0)).collect();
+    let sides: Vec<Option<Sides>> = placements.into_iter().map(|t| t.map(|x| x.1)).collect();
+    let old = net.nodes.clone();
+    let was_folded = folded_quads(net, f, smooth.scale, h);
+    let mut placed: Vec<bool> = targets.iter().map(Option::is_some).collect();
+    for (i, t) in targets.iter().enumerate() {
+        if let Some(q) = t {
+            net.nodes[i] = *q;
+        }
+    }
+    // Step 4: undo the placements that fold a quad, round after round.
+    loop {
+        let folded = folded_quads(net, f, smooth.scale, h);
+        let mut undone = 0;
+        for (q, quad) in net.quads.iter().enumerate() {
+            if !folded[q] || was_folded[q] {
+                continue;
+            }
+            // The placed corner that moved most goes back (at a step of the staircase a
+            // crease makes across the grid, the step's corner: the quad keeps the others).
+            let worst = quad
+                .iter()
+                .map(|&i| i as usize)
+                .filter(|&i| placed[i])
+                .max_by(|&a, &b| {
+                    let (da, db) = (
+                        (net.nodes[a] - old[a]).norm(),
+                        (net.nodes[b] - old[b]).norm(),
+                    );
+                    da.total_cmp(&db).then(b.cmp(&a))
+                });
+            if let Some(i) = worst {
+                placed[i] = false;
+                undone += 1;
+            }
+        }
+        if undone == 0 {
+            break;
+        }
+        report.undone_for_folds += undone;
+        for i in 0..net.nodes.len() {
+            if !placed[i] {
+                net.nodes[i] = old[i];
+            }
+        }
+    }
+    for (i, r) in roles.iter().enumerate() {
+        if placed[i] {
+            match r {
+                NodeRole::Crease(_) => report.placed_crease_nodes += 1,
+                NodeRole::Corner(_) => report.placed_corner_nodes += 1,
+                NodeRole::Face(_) => {}
+            }
+            report.max_move = report.max_move.max((net.nodes[i] - old[i]).norm() / h);
+            if matches!(sides[i], Some(Sides::Data(_))) {
+                report.placed_on_data += 1;
+            }
+        }
+    }
+
+    // Step 5: relaxation with the crease nodes on their creases.
+    let constraint = OnCreases::new(net, &region, field, &sides, &roles, &placed, h, opts);
+    report.smoothing = Some(relax_constrained(net, f, smooth, &constraint)?);
+    Ok(CreaseNet {
+        quad_region,
+        roles,
+        placed,
+        report,
+    })
+}
+
+/// Step 1b: the staircase quads collapsed ([`collapse_staircases`]), the merged nodes
+/// projected onto f. Returns the quads collapsed and the regions of the quads left; the net
+/// stays as it was when the collapsed net does not build.
+fn collapse<I: Implicit + ?Sized>(
+    net: &mut QuadNet,
+    f: &I,
+    quad_region: Vec<u32>,
+    smooth: &SmoothOptions,
+) -> (usize, Vec<u32>) {
+    let pinned = net.boundary_nodes();
+    let mut lq = LabelledQuads {
+        nodes: net.nodes.clone(),
+        quads: net.quads.clone(),
+        quad_region: quad_region.clone(),
+    };
+    let (n, merged) = collapse_staircases(&mut lq, &pinned);
+    if n == 0 {
+        return (0, quad_region);
+    }
+    let newton = NewtonOptions::new(smooth.scale, 0.5 * smooth.h);
+    for &i in &merged {
+        if let Ok((p, _)) = project(f, lq.nodes[i as usize], &newton) {
+            lq.nodes[i as usize] = p;
+        }
+    }
+    let rebuilt = if net.is_open() {
+        QuadNet::new_open(lq.nodes, lq.quads)
+    } else {
+        QuadNet::new(lq.nodes, lq.quads)
+    };
+    match rebuilt {
+        Ok(new) => {
+            *net = new;
+            (n, lq.quad_region)
+        }
+        Err(_) => (0, quad_region),
+    }
+}
+
+fn count(roles: &[NodeRole], pred: impl Fn(&NodeRole) -> bool) -> usize {
+    roles.iter().filter(|r| pred(r)).count()
+}
+
+/// Step 1: the region of each quad's centroid, with lone labels replaced by their neighbours'.
+/// Returns the labels and how many quads were relabelled.
+fn quad_regions(net: &QuadNet, region: &(dyn Fn(&Point3<f64>) -> u32 + Sync)) -> (Vec<u32>, usize) {
+    let mut label: Vec<u32> = net
+        .quads
+        .par_iter()
+        .map(|q| {
+            let c = q
+                .iter()
+                .map(|&i| net.nodes[i as usize].coords)
+                .sum::<nalgebra::Vector3<f64>>()
+                * 0.25;
+            region(&Point3::from(c))
+        })
+        .collect();
+    let first = label.clone();
+    for _ in 0..RELABEL_ROUNDS {
+        let next: Vec<u32> = (0..net.quads.len())
+            .map(|q| {
+                let mut votes: BTreeMap<u32, usize> = BTreeMap::new();
+                for &e in &net.quad_edges[q] {
+                    for o in net.quads_of_edge(e as usize) {
+                        if o as usize != q {
+                            *votes.entry(label[o as usize]).or_default() += 1;
+                        }
+                    }
+                }
+                match votes.iter().max_by_key(|(_, &n)| n) {
+                    Some((&r, &n)) if n >= 3 && r != label[q] => r,
+                    _ => label[q],
+                }
+            })
+            .collect();
+        if next == label {
+            break;
+        }
+        label = next;
+    }
+    let changed = label.iter().zip(&first).filter(|(a, b)| a != b).count();
+    (label, changed)
+}
+
+/// Step 2: each node's role by the regions of its quads.
+fn node_roles(net: &QuadNet, quad_region: &[u32]) -> Vec<NodeRole> {
+    (0..net.nodes.len())
+        .map(|i| {
+            let mut n: BTreeMap<u32, usize> = BTreeMap::new();
+            for &q in net.node_quads(i) {
+                *n.entry(quad_region[q as usize]).or_default() += 1;
+            }
+            let mut by_count: Vec<(u32, usize)> = n.into_iter().collect();
+            // Most quads first, ties by region.
+            by_count.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+            match by_count.len() {
+                0 => NodeRole::Face(u32::MAX),
+                1 => NodeRole::Face(by_count[0].0),
+                2 => {
+                    let (a, b) = (by_count[0].0, by_count[1].0);
+                    NodeRole::Crease([a.min(b), a.max(b)])
+                }
+                _ => {
+                    let mut s = [by_count[0].0, by_count[1].0, by_count[2].0];
+                    s.sort_unstable();
+                    NodeRole::Corner(s)
+                }
+            }
+        })
+        .collect()
+}
+
+/// The sides a node was put between.
+enum Sides {
+    /// Fitted to the data around it.
+    Data(Box<dyn SideField + Send + Sync>),
+    /// The sharp implicit's.
+    Implicit,
+}
+
+/// Step 5's constraint.
+struct OnCreases<'a> {
+    region: &'a (dyn Fn(&Point3<f64>) -> u32 + Sync),
+    field: &'a dyn SideField,
+    sides: &'a [Option<Sides>],
+    roles: &'a [NodeRole],
+    placed: &'a [bool],
+    /// Face nodes with a crease or corner node among their quads' corners.
+    beside_crease: Vec<bool>,
+    h: f64,
+    opts: CreaseNodeOptions,
+}
+
+impl<'a> OnCreases<'a> {
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        net: &QuadNet,
+        region: &'a (dyn Fn(&Point3<f64>) -> u32 + Sync),
+        field: &'a dyn SideField,
+        sides: &'a [Option<Sides>],
+        roles: &'a [NodeRole],
+        placed: &'a [bool],
+        h: f64,
+        opts: &CreaseNodeOptions,
+    ) -> Self {
+        let beside_crease = (0..net.nodes.len())
+            .map(|i| {
+                matches!(roles[i], NodeRole::Face(_))
+                    && net.node_quads(i).iter().any(|&q| {
+                        net.quads[q as usize]
+                            .iter()
+                            .any(|&k| !matches!(roles[k as usize], NodeRole::Face(_)))
+                    })
+            })
+            .collect();
+        OnCreases {
+            region,
+            field,
+            sides,
+            roles,
+            placed,
+            beside_crease,
+            h,
+            opts: *opts,
+        }
+    }
+}
+
+impl NodeConstraint for OnCreases<'_> {
+    fn pinned(&self, i: usize) -> bool {
+        matches!(self.roles[i], NodeRole::Corner(_)) && self.placed[i]
+    }
+
+    fn constrain(&self, i: usize, old: &Point3<f64>, new: &Point3<f64>) -> Point3<f64> {
+        match self.roles[i] {
+            NodeRole::Crease(s) if self.placed[i] => {
+                let field: &dyn SideField = match &self.sides[i] {
+                    Some(Sides::Data(d)) => &**d,
+                    _ => self.field,
+                };
+                meet_point(field, &s, *new, self.h, &self.opts.meet)
+                    .filter(|q| (q - new).norm() <= self.opts.max_move * self.h)
+                    .unwrap_or(*old)
+            }
+            NodeRole::Face(r) if self.beside_crease[i] => {
+                if (self.region)(new) == r {
+                    *new
+                } else {
+                    *old
+                }
+            }
+            _ => *new,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;
