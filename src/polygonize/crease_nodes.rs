@@ -35,12 +35,15 @@
 //!    three regions takes the three with the most quads at the node. The node keeps its place
 //!    when the iteration fails (the sides meet at under 6 degrees: a smooth join, not a
 //!    crease) or moves it more than [`CreaseNodeOptions::max_move`] voxels.
-//! 4. **No folds.** Of a quad that the placements flip or degenerate (and was fine before), the
-//!    placed corner that moved most goes back, round after round.
-//! 5. **Constrained relaxation** ([`relax_constrained`]): crease nodes slide along their
+//! 4. **Constrained relaxation** ([`relax_constrained`]): crease nodes slide along their
 //!    crease (the relaxed position snapped back onto it), corners stay, and a face node next to
 //!    a crease may not cross it (a move to where another region's surface passes nearer is
-//!    undone).
+//!    undone). The relaxation moves the neighbours of a node placed far (a corner node most
+//!    of a voxel from its corner) so that their quads unfold.
+//! 5. **No folds.** Of a quad still flipped or degenerate after the relaxation (and fine
+//!    before), the placed corner that moved most goes back, and steps 4-5 start again from the
+//!    first positions ([`RELAX_ROUNDS`] at most; then each placement that folds a quad before
+//!    any relaxation goes back, round after round, and the net is relaxed once).
 
 use super::crease_collapse::{collapse_staircases, LabelledQuads};
 use super::crease_split::{meet_point, CreaseSplitOptions, SideField};
@@ -56,6 +59,8 @@ use std::collections::BTreeMap;
 
 /// Most rounds of the quad relabelling (step 1).
 pub const RELABEL_ROUNDS: usize = 4;
+/// Most rounds of placement and relaxation (steps 4 and 5).
+pub const RELAX_ROUNDS: usize = 4;
 
 /// Options of [`place_on_creases`].
 #[derive(Debug, Clone, Copy)]
@@ -195,46 +200,50 @@ pub fn place_on_creases<I: Implicit + ?Sized>(
     let old = net.nodes.clone();
     let was_folded = folded_quads(net, f, smooth.scale, h);
     let mut placed: Vec<bool> = targets.iter().map(Option::is_some).collect();
-    for (i, t) in targets.iter().enumerate() {
-        if let Some(q) = t {
-            net.nodes[i] = *q;
-        }
-    }
-    // Step 4: undo the placements that fold a quad, round after round.
-    loop {
-        let folded = folded_quads(net, f, smooth.scale, h);
-        let mut undone = 0;
-        for (q, quad) in net.quads.iter().enumerate() {
-            if !folded[q] || was_folded[q] {
-                continue;
-            }
-            // The placed corner that moved most goes back (at a step of the staircase a
-            // crease makes across the grid, the step's corner: the quad keeps the others).
-            let worst = quad
-                .iter()
-                .map(|&i| i as usize)
-                .filter(|&i| placed[i])
-                .max_by(|&a, &b| {
-                    let (da, db) = (
-                        (net.nodes[a] - old[a]).norm(),
-                        (net.nodes[b] - old[b]).norm(),
-                    );
-                    da.total_cmp(&db).then(b.cmp(&a))
-                });
-            if let Some(i) = worst {
-                placed[i] = false;
-                undone += 1;
+    // Steps 4 and 5: the placements made and the net relaxed around them; of each quad still
+    // folded after the relaxation the placed corner that moved most goes back, and the net is
+    // placed and relaxed again from the first positions ([`RELAX_ROUNDS`] at most).
+    let mut smoothing = None;
+    let mut settled = false;
+    for _ in 0..RELAX_ROUNDS {
+        net.nodes.clone_from(&old);
+        for (i, t) in targets.iter().enumerate() {
+            if let (true, Some(q)) = (placed[i], t) {
+                net.nodes[i] = *q;
             }
         }
+        let constraint = OnCreases::new(net, &region, field, &sides, &roles, &placed, h, opts);
+        smoothing = Some(relax_constrained(net, f, smooth, &constraint)?);
+        let undone = undo_folding(net, f, smooth, &was_folded, &old, &mut placed);
         if undone == 0 {
+            settled = true;
             break;
         }
         report.undone_for_folds += undone;
-        for i in 0..net.nodes.len() {
-            if !placed[i] {
-                net.nodes[i] = old[i];
+    }
+    if !settled {
+        // Last resort: each placement that folds a quad before any relaxation goes back, round
+        // after round, which ends with no quad folded that was fine.
+        net.nodes.clone_from(&old);
+        for (i, t) in targets.iter().enumerate() {
+            if let (true, Some(q)) = (placed[i], t) {
+                net.nodes[i] = *q;
             }
         }
+        loop {
+            let undone = undo_folding(net, f, smooth, &was_folded, &old, &mut placed);
+            if undone == 0 {
+                break;
+            }
+            report.undone_for_folds += undone;
+            for i in 0..net.nodes.len() {
+                if !placed[i] {
+                    net.nodes[i] = old[i];
+                }
+            }
+        }
+        let constraint = OnCreases::new(net, &region, field, &sides, &roles, &placed, h, opts);
+        smoothing = Some(relax_constrained(net, f, smooth, &constraint)?);
     }
     for (i, r) in roles.iter().enumerate() {
         if placed[i] {
@@ -243,16 +252,15 @@ pub fn place_on_creases<I: Implicit + ?Sized>(
                 NodeRole::Corner(_) => report.placed_corner_nodes += 1,
                 NodeRole::Face(_) => {}
             }
-            report.max_move = report.max_move.max((net.nodes[i] - old[i]).norm() / h);
+            if let Some(q) = targets[i] {
+                report.max_move = report.max_move.max((q - old[i]).norm() / h);
+            }
             if matches!(sides[i], Some(Sides::Data(_))) {
                 report.placed_on_data += 1;
             }
         }
     }
-
-    // Step 5: relaxation with the crease nodes on their creases.
-    let constraint = OnCreases::new(net, &region, field, &sides, &roles, &placed, h, opts);
-    report.smoothing = Some(relax_constrained(net, f, smooth, &constraint)?);
+    report.smoothing = smoothing;
     Ok(CreaseNet {
         quad_region,
         roles,
@@ -298,6 +306,42 @@ fn collapse<I: Implicit + ?Sized>(
         }
         Err(_) => (0, quad_region),
     }
+}
+
+/// Of each quad folded now that was fine before, the placed corner farthest from its first
+/// position stops being placed (at a step of the staircase a crease makes across the grid,
+/// the step's corner: the quad keeps the others). Returns how many.
+fn undo_folding<I: Implicit + ?Sized>(
+    net: &QuadNet,
+    f: &I,
+    smooth: &SmoothOptions,
+    was_folded: &[bool],
+    old: &[Point3<f64>],
+    placed: &mut [bool],
+) -> usize {
+    let folded = folded_quads(net, f, smooth.scale, smooth.h);
+    let mut undone = 0;
+    for (q, quad) in net.quads.iter().enumerate() {
+        if !folded[q] || was_folded[q] {
+            continue;
+        }
+        let worst = quad
+            .iter()
+            .map(|&i| i as usize)
+            .filter(|&i| placed[i])
+            .max_by(|&a, &b| {
+                let (da, db) = (
+                    (net.nodes[a] - old[a]).norm(),
+                    (net.nodes[b] - old[b]).norm(),
+                );
+                da.total_cmp(&db).then(b.cmp(&a))
+            });
+        if let Some(i) = worst {
+            placed[i] = false;
+            undone += 1;
+        }
+    }
+    undone
 }
 
 fn count(roles: &[NodeRole], pred: impl Fn(&NodeRole) -> bool) -> usize {

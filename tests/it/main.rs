@@ -14,6 +14,7 @@ mod cli_close;
 mod cli_features;
 mod cli_fill_holes;
 mod cli_fit;
+mod cli_fit_sharp;
 mod cli_inspect;
 mod cli_reconstruct;
 mod cli_render;
