@@ -75,12 +75,13 @@ pub struct Args {
     /// do not follow them yet.
     #[arg(long)]
     pub features: bool,
-    /// Keep sharp edges (work in progress, issue 36): find the smooth regions and creases first
-    /// (as `scansurf features`), fit one function per region in the cells a crease crosses, and
-    /// put the quad net's nodes on the creases and corners (the report's `crease_nodes`;
-    /// `--net` shows the net by region). The patches still join smoothly across the creases.
-    /// `on` whenever the input has creases (`--sharp` alone means `on`), `auto` when it looks
-    /// machined (as `reconstruct`), `off` (default) rounds every edge.
+    /// Also build the crease-aligned quad net (work in progress, issue 36): find the smooth
+    /// regions and creases first (as `scansurf features`), fit a second implicit with one
+    /// function per region in the cells a crease crosses, build its net in the frame of the
+    /// part's plane faces and put the nodes on the creases and corners (the report's
+    /// `crease_nodes`; `--net` writes this net, by region). The STEP is unchanged for now: its
+    /// patches are built on the smooth net. `on` whenever the input has creases (`--sharp`
+    /// alone means `on`), `auto` when it looks machined (as `reconstruct`), `off` (default).
     #[arg(long, value_enum, default_value_t = crate::features::SharpMode::Off, num_args = 0..=1,
           default_missing_value = "on", value_name = "on|off|auto")]
     pub sharp: crate::features::SharpMode,
@@ -261,7 +262,27 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     if let Some(r) = &a.report {
         super::write_json(r, &report)?;
     }
-    if let Some(n) = &a.net {
+    if let (Some(n), Some(cnet)) = (&a.net, &report.crease_net) {
+        // `--sharp`: the crease-aligned net, its quads in groups by region.
+        let comments = [format!(
+            "crease-aligned quad net of {} (--sharp): {} nodes, {} quads, {}; the patches are \
+             built on the voxel net for now",
+            name(&a.output),
+            cnet.nodes.len(),
+            cnet.quads.len(),
+            if cnet.is_open() { "open" } else { "closed" }
+        )];
+        crate::io::write_atomic(n, |w| {
+            let regions = report
+                .net_regions
+                .as_ref()
+                .map(|r| crate::io::obj::QuadRegions {
+                    quad_region: &r.quad_region,
+                    crease_edges: &r.crease_edges,
+                });
+            crate::io::obj::write_quads(w, &cnet.nodes, &cnet.quads, &comments, regions)
+        })?;
+    } else if let Some(n) = &a.net {
         let quads = network.quads();
         let comments = [format!(
             "quad net of {}: {} nodes, {} quads (one per patch, in the STEP's face order), {}",

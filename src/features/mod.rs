@@ -33,6 +33,7 @@ pub mod details;
 pub mod detect;
 pub mod export;
 pub mod folds;
+pub mod grid_frame;
 pub mod lines;
 pub mod local_fit;
 pub mod merge;

@@ -52,12 +52,13 @@ pub struct FitOptions {
     /// What to do with the openings of the data (`--close`, default `auto`;
     /// [`crate::openings`]).
     pub close: crate::openings::Close,
-    /// Keep the sharp edges (`--sharp`, default `off` while the crease-aligned net is being
-    /// built, issue 36): the input is segmented into smooth regions, the implicit fitted with
-    /// one function per region in the cells a crease crosses ([`crate::implicit::sharp`]),
-    /// and the net's nodes put on the creases and corners
-    /// ([`crate::polygonize::crease_nodes`]). `Auto` decides as `reconstruct` does
-    /// ([`crate::features::sharp_choice`]).
+    /// Build the crease-aligned net too (`--sharp`, default `off` while it is being built,
+    /// issue 36): the input is segmented into smooth regions, a second implicit fitted with one
+    /// function per region in the cells a crease crosses ([`crate::implicit::sharp`]), its net
+    /// built in the frame of the part's plane faces and its nodes put on the creases and
+    /// corners ([`crate::polygonize::crease_nodes`]); the report and `--net` show it. The
+    /// patches are still those of the smooth implicit's net. `Auto` decides as `reconstruct`
+    /// does ([`crate::features::sharp_choice`]).
     pub sharp: crate::features::SharpMode,
     /// Whether the user gave the patch count or size (`--patches`, `--patch-size`). When not,
     /// an open fit whose net misses parts of the data thinner than a patch is made again with
@@ -161,11 +162,19 @@ pub struct FitReport {
     /// Whether the sharp edges were kept, and why (`None` with `--sharp off`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sharp: Option<crate::features::SharpChoice>,
-    /// The net's nodes put on the creases and corners (`--sharp` when kept).
+    /// The frame of the part's plane faces the crease-aligned net was built in (`--sharp` when
+    /// kept, and the faces are not along the world axes; [`crate::features::grid_frame`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grid_frame: Option<crate::features::grid_frame::GridFrame>,
+    /// The crease-aligned net (`--sharp` when kept): what `--net` writes then.
+    #[serde(skip)]
+    pub crease_net: Option<QuadNet>,
+    /// The crease-aligned net's nodes put on the creases and corners (`--sharp` when kept).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub crease_nodes: Option<crate::polygonize::crease_nodes::CreaseNodesReport>,
-    /// The patches labelled by the smooth regions: of `features` (`fit --features`), or those
-    /// the net's nodes were put between (`--sharp`, when kept).
+    /// The patches labelled by the smooth regions of `features` (`fit --features`), or the
+    /// quads of the crease-aligned net by the regions its nodes were put between (`--sharp`,
+    /// when kept).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub net_regions: Option<crate::features::net_regions::NetRegions>,
     pub timings: FitTimings,
@@ -240,12 +249,7 @@ pub fn fit_measured(
     let fit_implicit = |open: bool| {
         let mut implicit_opts = opts.implicit.clone();
         implicit_opts.bridge_openings &= !open;
-        PouImplicit::fit_with_regions(
-            &op.points,
-            &op.normals,
-            region_labels.as_deref(),
-            &implicit_opts,
-        )
+        PouImplicit::fit(&op.points, &op.normals, &implicit_opts)
     };
     let f = fit_implicit(open)?;
     timings.implicit = t.elapsed().as_secs_f64();
@@ -257,56 +261,40 @@ pub fn fit_measured(
     // The input points' tree: the net stage cuts an open net to them, the support is
     // measured against them.
     let data = KdTree::build(&op.points)?;
-    // Each grid placement's net is tried as patches: TRIAL_INTERVALS samples per side, no
-    // refinement, its jumps over 5 degrees counted. The kept placement's trial sampling is the
-    // first round of the real sampling.
     let tol = opts.tolerance * diag;
     // The points the trial patches of an open net are measured against.
     let measured_sample = crate::openings::coverage::measured_sample(&op.points);
+    let world = NetInputs {
+        points: &op.points,
+        data: &data,
+        bounds,
+        measured_sample: &measured_sample,
+    };
+    // `--sharp`: a part whose plane faces are not along the world axes gets its net built in
+    // their frame ([`crate::features::grid_frame`]), so that its creases run along the grid.
+    let grid_frame = segmentation
+        .as_ref()
+        .and_then(crate::features::grid_frame::grid_frame);
+    let framed = grid_frame
+        .as_ref()
+        .map(|g| FramedInputs::new(g.rotation(), &op.points));
+    let framed = framed.transpose()?;
     let build_net = |f: &PouImplicit, close: crate::openings::Close| {
-        let open = close == crate::openings::Close::Open;
-        let trial = |net: &QuadNet| -> Option<(TrialScore, PatchSampling)> {
-            let mut o = SampleOptions::new(tol, diag);
-            o.near = open.then(|| NearData::for_net(&data, net));
-            (o.min_intervals, o.max_intervals, o.max_rounds) =
-                (TRIAL_INTERVALS, TRIAL_INTERVALS, 1);
-            // Only the kept placement's patches are measured, when the sampling starts from
-            // them.
-            o.measure = false;
-            let sampling = sample_patches(net, f, &o).ok()?;
-            let network = patch_network(f, net, &sampling).ok()?;
-            let c = normal_jumps(&network, opts.jump_samples);
-            let grids: Vec<_> = sampling.patches.iter().map(|p| &p.points).collect();
-            let [far] = surface_support_at(&grids, &data, [0.01 * diag]);
-            let points_p99 = open.then(|| {
-                deviation_from_patches(&network, &measured_sample, diag)
-                    .stats
-                    .absolute
-                    .p99
-            });
-            let score = TrialScore {
-                samples_over_5_deg: c.samples_over_5_deg,
-                far_share: far.unsupported_fraction,
-                points_p99,
-            };
-            Some((score, sampling))
-        };
-        if open {
-            let (net, report, kept, coverage) = fit_open_net(
-                f,
-                &op.points,
-                &data,
-                &bounds,
-                opts.size,
-                opts.size_given,
-                &trial,
-            )?;
-            Ok((net, report, kept, Some(coverage)))
-        } else {
-            let (net, report, kept) =
-                fit_net(f, &op.points, &data, &bounds, opts.size, close, &trial)?;
-            Ok::<_, Error>((net, report, kept, None))
+        net_stage(f, close, &world, opts, tol, diag)
+    };
+    let build_crease_net = |f: &PouImplicit, close: crate::openings::Close| match &framed {
+        Some(fi) => {
+            let g = crate::implicit::framed::Framed { f, r: fi.r };
+            let (mut net, report, _, coverage) =
+                net_stage(&g, close, &fi.inputs(), opts, tol, diag)?;
+            let back = fi.r.inverse();
+            for p in &mut net.nodes {
+                *p = back * *p;
+            }
+            // The trial sampling lies in the frame; the sampling starts afresh.
+            Ok((net, report, None, coverage))
         }
+        None => net_stage(f, close, &world, opts, tol, diag),
     };
     let first = build_net(&f, closure.chosen);
     // `auto` closed a surface the data do not back, or could not build the closed net: fitted
@@ -317,7 +305,7 @@ pub fn fit_measured(
     let mut reopened = closure.clone();
     // The open implicit's time, counted under `implicit`, not `net`.
     let mut refit_secs = 0.0;
-    let (f, (mut net, mut net_report, mut trial_sampling, coverage)) = match because {
+    let (f, (net, net_report, trial_sampling, coverage)) = match because {
         Some(because) if reopened.reopen(&because) => {
             progress("implicit", 0.05);
             let t_reopen = Instant::now();
@@ -354,34 +342,39 @@ pub fn fit_measured(
     closure.rim = net_report.rim.clone();
 
     // `--sharp`: the net's nodes on the creases and corners.
+    // `--sharp`: the crease-aligned net, on the sharp implicit (one function per region in the
+    // cells a crease crosses), its nodes put on the creases and corners. The patches are still
+    // built on the net above: joined with tangent continuity across a crease, patches on the
+    // crease net fold (issue 37 makes them meet with G0 there).
     let crease_net = match &segmentation {
         Some(seg) => {
             progress("creases", 0.45);
             let t = Instant::now();
-            let field = crate::features::sharp_field::SharpField { seg, f: &f };
-            let smooth = crate::polygonize::net_smooth::SmoothOptions::new(diag, net_report.h);
-            let data = crate::features::data_sides::DataSides {
+            let mut implicit_opts = opts.implicit.clone();
+            implicit_opts.bridge_openings &= closure.chosen != crate::openings::Close::Open;
+            let fs = PouImplicit::fit_with_regions(
+                &op.points,
+                &op.normals,
+                region_labels.as_deref(),
+                &implicit_opts,
+            )?;
+            let (mut cnet, creport, _, _) = build_crease_net(&fs, closure.chosen)?;
+            let field = crate::features::sharp_field::SharpField { seg, f: &fs };
+            let data_sides = crate::features::data_sides::DataSides {
                 seg,
-                radius: DATA_SIDES_RADIUS * net_report.h,
+                radius: DATA_SIDES_RADIUS * creport.h,
             };
+            let smooth = crate::polygonize::net_smooth::SmoothOptions::new(diag, creport.h);
             let placed = crate::polygonize::crease_nodes::place_on_creases(
-                &mut net,
-                &f,
+                &mut cnet,
+                &fs,
                 &field,
-                Some(&data),
+                Some(&data_sides),
                 &smooth,
                 &crate::polygonize::crease_nodes::CreaseNodeOptions::default(),
             )?;
-            // The trial patches were sampled on the net before its nodes moved.
-            trial_sampling = None;
-            // The staircases' quads collapsed: the counts change.
-            net_report.patches = net.quads.len();
-            net_report.nodes = net.nodes.len();
-            net_report.edges = net.edges.len();
-            net_report.euler_characteristic = net.euler_characteristic();
-            net_report.valence_histogram = net.valence_histogram();
             timings.creases = t.elapsed().as_secs_f64();
-            Some((placed, seg.regions.len()))
+            Some((placed, cnet, seg.regions.len()))
         }
         None => None,
     };
@@ -468,8 +461,8 @@ pub fn fit_measured(
         hole_fill: None,
         step: None,
         net_regions: match &crease_net {
-            Some((c, regions)) => Some(crate::features::net_regions::from_labels(
-                &network.quads(),
+            Some((c, cnet, regions)) => Some(crate::features::net_regions::from_labels(
+                &cnet.quads,
                 c.quad_region.clone(),
                 *regions,
             )),
@@ -478,11 +471,127 @@ pub fn fit_measured(
                 .map(|found| crate::features::net_regions::label_network(&network, found)),
         },
         sharp,
-        crease_nodes: crease_net.map(|(c, _)| c.report),
+        grid_frame,
+        crease_nodes: crease_net.as_ref().map(|(c, _, _)| c.report.clone()),
+        crease_net: crease_net.map(|(_, cnet, _)| cnet),
         features: features.map(|found| found.summary()),
         timings,
     };
     Ok((network, report))
+}
+
+/// What the net stage works on, in one frame: the points (seeds of the voxel net), their tree,
+/// their box, and the sample the trial patches of an open net are measured against.
+struct NetInputs<'a> {
+    points: &'a [nalgebra::Point3<f64>],
+    data: &'a KdTree,
+    bounds: Aabb,
+    measured_sample: &'a [nalgebra::Point3<f64>],
+}
+
+/// The net stage's inputs turned into a part's frame (`--sharp`).
+struct FramedInputs {
+    /// World to frame.
+    r: nalgebra::Rotation3<f64>,
+    points: Vec<nalgebra::Point3<f64>>,
+    data: KdTree,
+    bounds: Aabb,
+    measured_sample: Vec<nalgebra::Point3<f64>>,
+}
+
+impl FramedInputs {
+    fn new(r: nalgebra::Rotation3<f64>, points: &[nalgebra::Point3<f64>]) -> Result<Self> {
+        let points: Vec<_> = points.iter().map(|p| r * p).collect();
+        let data = KdTree::build(&points)?;
+        let bounds = Aabb::of(&points).ok_or_else(|| Error::Degenerate("no points".into()))?;
+        let measured_sample = crate::openings::coverage::measured_sample(&points);
+        Ok(FramedInputs {
+            r,
+            points,
+            data,
+            bounds,
+            measured_sample,
+        })
+    }
+
+    fn inputs(&self) -> NetInputs<'_> {
+        NetInputs {
+            points: &self.points,
+            data: &self.data,
+            bounds: self.bounds,
+            measured_sample: &self.measured_sample,
+        }
+    }
+}
+
+/// The net, its report, the kept placement's trial sampling and (open fits) the coverage.
+type NetStage = (
+    QuadNet,
+    NetReport,
+    Option<PatchSampling>,
+    Option<crate::openings::coverage::CoverageReport>,
+);
+
+/// The quad net stage on `f` ([`fit_net`], or [`fit_open_net`] when `close` is open), each grid
+/// placement's net tried as patches: [`TRIAL_INTERVALS`] samples per side, no refinement, its
+/// jumps over 5 degrees counted. The kept placement's trial sampling is the first round of the
+/// real sampling.
+fn net_stage<I: Implicit + Sync + ?Sized>(
+    f: &I,
+    close: crate::openings::Close,
+    inp: &NetInputs<'_>,
+    opts: &FitOptions,
+    tol: f64,
+    diag: f64,
+) -> Result<NetStage> {
+    let open = close == crate::openings::Close::Open;
+    let trial = |net: &QuadNet| -> Option<(TrialScore, PatchSampling)> {
+        let mut o = SampleOptions::new(tol, diag);
+        o.near = open.then(|| NearData::for_net(inp.data, net));
+        (o.min_intervals, o.max_intervals, o.max_rounds) = (TRIAL_INTERVALS, TRIAL_INTERVALS, 1);
+        // Only the kept placement's patches are measured, when the sampling starts from them.
+        o.measure = false;
+        let sampling = sample_patches(net, f, &o).ok()?;
+        let network = patch_network(f, net, &sampling).ok()?;
+        let c = normal_jumps(&network, opts.jump_samples);
+        let grids: Vec<_> = sampling.patches.iter().map(|p| &p.points).collect();
+        let [far] = surface_support_at(&grids, inp.data, [0.01 * diag]);
+        let points_p99 = open.then(|| {
+            deviation_from_patches(&network, inp.measured_sample, diag)
+                .stats
+                .absolute
+                .p99
+        });
+        let score = TrialScore {
+            samples_over_5_deg: c.samples_over_5_deg,
+            far_share: far.unsupported_fraction,
+            points_p99,
+        };
+        Some((score, sampling))
+    };
+    if open {
+        let (net, report, kept, coverage) = fit_open_net(
+            f,
+            inp.points,
+            inp.data,
+            &inp.bounds,
+            opts.size,
+            opts.size_given,
+            &trial,
+        )?;
+        Ok((net, report, kept, Some(coverage)))
+    } else {
+        let (net, report, kept) = fit_net(
+            f,
+            inp.points,
+            inp.data,
+            &inp.bounds,
+            opts.size,
+            close,
+            &trial,
+        )?;
+        Ok((net, report, kept, None))
+    }
 }
 
 /// One bicubic patch per quad of `net` from its samples (seed 004 eq. 9-14): cross

@@ -28,6 +28,7 @@ pub trait Implicit: Sync {
     }
 }
 
+pub mod framed;
 pub mod local;
 pub mod noise;
 pub mod poly;

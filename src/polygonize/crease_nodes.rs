@@ -108,6 +108,9 @@ pub enum NodeRole {
 /// What [`place_on_creases`] did (the report's `crease_nodes`).
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct CreaseNodesReport {
+    /// Quads and nodes of the net.
+    pub quads: usize,
+    pub nodes: usize,
     /// Quads whose centroid's region was replaced by their neighbours' (step 1).
     pub relabelled_quads: usize,
     /// Quads of the staircases collapsed (step 1b).
@@ -261,6 +264,7 @@ pub fn place_on_creases<I: Implicit + ?Sized>(
         }
     }
     report.smoothing = smoothing;
+    (report.quads, report.nodes) = (net.quads.len(), net.nodes.len());
     Ok(CreaseNet {
         quad_region,
         roles,
