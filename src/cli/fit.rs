@@ -262,16 +262,34 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     if let Some(r) = &a.report {
         super::write_json(r, &report)?;
     }
-    if let (Some(n), Some(cnet)) = (&a.net, &report.crease_net) {
-        // `--sharp`: the crease-aligned net, its quads in groups by region.
-        let comments = [format!(
-            "crease-aligned quad net of {} (--sharp): {} nodes, {} quads, {}; the patches are \
-             built on the voxel net for now",
-            name(&a.output),
-            cnet.nodes.len(),
-            cnet.quads.len(),
-            if cnet.is_open() { "open" } else { "closed" }
-        )];
+    if let Some(n) = &a.net {
+        // `--sharp`: the crease-aligned net; otherwise the patches' own.
+        let (nodes, quads, comment) = match &report.crease_net {
+            Some(cnet) => (
+                cnet.nodes.clone(),
+                cnet.quads.clone(),
+                format!(
+                    "crease-aligned quad net of {} (--sharp): {} nodes, {} quads, {}; the \
+                     patches are built on the voxel net for now",
+                    name(&a.output),
+                    cnet.nodes.len(),
+                    cnet.quads.len(),
+                    if cnet.is_open() { "open" } else { "closed" }
+                ),
+            ),
+            None => {
+                let quads = network.quads();
+                let comment = format!(
+                    "quad net of {}: {} nodes, {} quads (one per patch, in the STEP's face \
+                     order), {}",
+                    name(&a.output),
+                    network.vertices.len(),
+                    quads.len(),
+                    if network.closed { "closed" } else { "open" }
+                );
+                (network.vertices.clone(), quads, comment)
+            }
+        };
         crate::io::write_atomic(n, |w| {
             let regions = report
                 .net_regions
@@ -280,26 +298,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
                     quad_region: &r.quad_region,
                     crease_edges: &r.crease_edges,
                 });
-            crate::io::obj::write_quads(w, &cnet.nodes, &cnet.quads, &comments, regions)
-        })?;
-    } else if let Some(n) = &a.net {
-        let quads = network.quads();
-        let comments = [format!(
-            "quad net of {}: {} nodes, {} quads (one per patch, in the STEP's face order), {}",
-            name(&a.output),
-            network.vertices.len(),
-            quads.len(),
-            if network.closed { "closed" } else { "open" }
-        )];
-        crate::io::write_atomic(n, |w| {
-            let regions = report
-                .net_regions
-                .as_ref()
-                .map(|r| crate::io::obj::QuadRegions {
-                    quad_region: &r.quad_region,
-                    crease_edges: &r.crease_edges,
-                });
-            crate::io::obj::write_quads(w, &network.vertices, &quads, &comments, regions)
+            crate::io::obj::write_quads(w, &nodes, &quads, &[comment], regions)
         })?;
     }
     let pts = measured;

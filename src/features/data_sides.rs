@@ -19,11 +19,11 @@
 //! both sides are the same function. The data do not depend on that, and on a mesh of flat
 //! facets they give the planes exactly.
 
-use super::local_fit::{spread, LocalQuadric};
+use super::local_fit::{principal_axes, spread, LocalQuadric};
 use super::Segmentation;
 use crate::polygonize::crease_nodes::LocalSides;
 use crate::polygonize::crease_split::SideField;
-use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
+use nalgebra::{Point3, Vector3};
 
 /// Fewest points of a region for its surface.
 pub const MIN_POINTS: usize = 8;
@@ -160,15 +160,5 @@ fn fit_region(centre: Point3<f64>, pts: &[Point3<f64>]) -> Option<LocalQuadric> 
 
 /// The unit direction of least spread of `pts` (the normal of their best plane).
 fn least_spread_axis(pts: &[Point3<f64>]) -> Option<Vector3<f64>> {
-    let n = pts.len() as f64;
-    let c = pts.iter().map(|p| p.coords).sum::<Vector3<f64>>() / n;
-    let mut m = Matrix3::zeros();
-    for p in pts {
-        let d = p.coords - c;
-        m += d * d.transpose();
-    }
-    let e = SymmetricEigen::new(m);
-    let k = e.eigenvalues.imin();
-    let a = e.eigenvectors.column(k).into_owned();
-    a.try_normalize(1e-12)
+    principal_axes(pts)?.1[0].try_normalize(1e-12)
 }

@@ -16,7 +16,7 @@
 //! part is already along the grid, which then stays as it is (the same net as without it).
 
 use super::Segmentation;
-use nalgebra::{Matrix3, Rotation3, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, Rotation3, Vector3};
 
 /// Largest ratio of a plane face's smallest to middle principal spread.
 pub const PLANAR: f64 = 0.02;
@@ -96,24 +96,12 @@ fn plane_normal(pts: &[nalgebra::Point3<f64>]) -> Option<Vector3<f64>> {
     if pts.len() < 10 {
         return None;
     }
-    let n = pts.len() as f64;
-    let c = pts.iter().map(|p| p.coords).sum::<Vector3<f64>>() / n;
-    let mut m = Matrix3::zeros();
-    for p in pts {
-        let d = p.coords - c;
-        m += d * d.transpose();
-    }
-    let e = SymmetricEigen::new(m);
-    let mut idx = [0usize, 1, 2];
-    idx.sort_by(|&a, &b| e.eigenvalues[a].total_cmp(&e.eigenvalues[b]));
-    let (lo, mid) = (e.eigenvalues[idx[0]].max(0.0), e.eigenvalues[idx[1]]);
+    let (spread, axes) = super::local_fit::principal_axes(pts)?;
+    let (lo, mid) = (spread[0].max(0.0), spread[1]);
     if mid.is_nan() || mid <= 0.0 || (lo / mid).sqrt() > PLANAR {
         return None;
     }
-    e.eigenvectors
-        .column(idx[0])
-        .into_owned()
-        .try_normalize(1e-12)
+    axes[0].try_normalize(1e-12)
 }
 
 /// The direction of `normals` (sign-free) with the most weight within the angle of cosine

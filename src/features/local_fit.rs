@@ -162,6 +162,30 @@ pub const FIT: Support = Support {
     spread: 0.0,
 };
 
+/// The principal spreads of `pts` about their centroid: the eigenvalues of their scatter
+/// matrix, smallest first, with the unit axes (`None` for no points or a non-finite scatter).
+pub fn principal_axes(pts: &[Point3<f64>]) -> Option<([f64; 3], [Vector3<f64>; 3])> {
+    if pts.is_empty() {
+        return None;
+    }
+    let c = pts.iter().map(|p| p.coords).sum::<Vector3<f64>>() / pts.len() as f64;
+    let mut m = nalgebra::Matrix3::zeros();
+    for p in pts {
+        let d = p.coords - c;
+        m += d * d.transpose();
+    }
+    if !m.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let e = nalgebra::SymmetricEigen::new(m);
+    let mut idx = [0usize, 1, 2];
+    idx.sort_by(|&a, &b| e.eigenvalues[a].total_cmp(&e.eigenvalues[b]));
+    Some((
+        idx.map(|k| e.eigenvalues[k]),
+        idx.map(|k| e.eigenvectors.column(k).into_owned()),
+    ))
+}
+
 /// Ratio of the smaller to the larger standard deviation of `pts` across `axis`.
 pub fn spread(pts: &[Point3<f64>], axis: &Vector3<f64>) -> f64 {
     let Some(frame) = Frame::new(pts[0], *axis, 1.0) else {
