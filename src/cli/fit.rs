@@ -346,6 +346,16 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
             support.threshold
         );
     }
+    if report.control_net.patches_outside > 0 {
+        eprintln!(
+            "warning: {} patches have control points farther than {:.0}% of the diagonal outside \
+             the input's bounding box (up to {:.2e} of it): their interpolation went wrong \
+             (report: control_net); check them in a viewer",
+            report.control_net.patches_outside,
+            100.0 * crate::quality::control_net::OUTSIDE_BAR,
+            report.control_net.outside_max
+        );
+    }
     if !quiet {
         let dev = &report.deviation.stats.relative;
         eprintln!(

@@ -148,6 +148,9 @@ pub struct FitReport {
     /// The same at 1 % of the bounding-box diagonal: surface clearly away from the data
     /// (with `--close open` the bar is under 0.2 % of the area).
     pub support_far: SupportReport,
+    /// How far the patches' control points leave the input's bounding box: a patch whose
+    /// interpolation went wrong ([`crate::quality::control_net`]).
+    pub control_net: crate::quality::control_net::ControlNetReport,
     /// The local hole filling run before the fit (`--fill-holes rbf|planar|flat`), if any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hole_fill: Option<crate::holes::FillReport>,
@@ -458,6 +461,7 @@ pub fn fit_measured(
         folds,
         support,
         support_far,
+        control_net: crate::quality::control_net::control_net(&network, &bounds),
         hole_fill: None,
         step: None,
         net_regions: match &crease_net {

@@ -4,6 +4,7 @@
 //! surfaces, not on a tessellation.
 
 pub mod continuity;
+pub mod control_net;
 pub mod folds;
 pub mod patch_deviation;
 pub mod support;
