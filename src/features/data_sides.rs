@@ -131,12 +131,13 @@ fn fit_region(centre: Point3<f64>, pts: &[Point3<f64>]) -> Option<LocalQuadric> 
         return None;
     }
     let axis = least_spread_axis(pts)?;
-    if spread(pts, &axis) < MIN_SPREAD {
+    let spread = spread(pts, &axis);
+    if spread < MIN_SPREAD {
         return None;
     }
     // A narrow strip of points (a chamfer a patch wide) leaves the curvature across it
     // unfixed: a plane there.
-    let quadratic_from = if spread(pts, &axis) >= QUADRATIC_SPREAD {
+    let quadratic_from = if spread >= QUADRATIC_SPREAD {
         QUADRATIC_FROM
     } else {
         usize::MAX

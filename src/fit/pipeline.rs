@@ -104,7 +104,8 @@ pub struct FitTimings {
     pub features: f64,
     pub implicit: f64,
     pub net: f64,
-    /// The net's nodes put on the creases (`--sharp`; 0 without).
+    /// The crease-aligned net of `--sharp` (its implicit, net and nodes put on the creases; 0
+    /// without).
     pub creases: f64,
     pub sampling: f64,
     pub patches: f64,
@@ -245,7 +246,6 @@ pub fn fit_measured(
         timings.features += t.elapsed().as_secs_f64();
         (choice.sharp.then_some(seg), Some(choice))
     };
-    let region_labels = segmentation.as_ref().map(|seg| seg.labels_of(&op.points));
 
     progress("implicit", 0.05);
     let t = Instant::now();
@@ -344,7 +344,6 @@ pub fn fit_measured(
     closure.trim = net_report.trim.clone();
     closure.rim = net_report.rim.clone();
 
-    // `--sharp`: the net's nodes on the creases and corners.
     // `--sharp`: the crease-aligned net, on the sharp implicit (one function per region in the
     // cells a crease crosses), its nodes put on the creases and corners. The patches are still
     // built on the net above: joined with tangent continuity across a crease, patches on the
@@ -355,10 +354,11 @@ pub fn fit_measured(
             let t = Instant::now();
             let mut implicit_opts = opts.implicit.clone();
             implicit_opts.bridge_openings &= closure.chosen != crate::openings::Close::Open;
+            let labels = seg.labels_of(&op.points);
             let fs = PouImplicit::fit_with_regions(
                 &op.points,
                 &op.normals,
-                region_labels.as_deref(),
+                Some(&labels),
                 &implicit_opts,
             )?;
             let (mut cnet, creport, _, _) = build_crease_net(&fs, closure.chosen)?;

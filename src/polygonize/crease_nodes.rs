@@ -209,12 +209,7 @@ pub fn place_on_creases<I: Implicit + ?Sized>(
     let mut smoothing = None;
     let mut settled = false;
     for _ in 0..RELAX_ROUNDS {
-        net.nodes.clone_from(&old);
-        for (i, t) in targets.iter().enumerate() {
-            if let (true, Some(q)) = (placed[i], t) {
-                net.nodes[i] = *q;
-            }
-        }
+        apply_placements(net, &old, &targets, &placed);
         let constraint = OnCreases::new(net, &region, field, &sides, &roles, &placed, h, opts);
         smoothing = Some(relax_constrained(net, f, smooth, &constraint)?);
         let undone = undo_folding(net, f, smooth, &was_folded, &old, &mut placed);
@@ -227,23 +222,14 @@ pub fn place_on_creases<I: Implicit + ?Sized>(
     if !settled {
         // Last resort: each placement that folds a quad before any relaxation goes back, round
         // after round, which ends with no quad folded that was fine.
-        net.nodes.clone_from(&old);
-        for (i, t) in targets.iter().enumerate() {
-            if let (true, Some(q)) = (placed[i], t) {
-                net.nodes[i] = *q;
-            }
-        }
+        apply_placements(net, &old, &targets, &placed);
         loop {
             let undone = undo_folding(net, f, smooth, &was_folded, &old, &mut placed);
             if undone == 0 {
                 break;
             }
             report.undone_for_folds += undone;
-            for i in 0..net.nodes.len() {
-                if !placed[i] {
-                    net.nodes[i] = old[i];
-                }
-            }
+            apply_placements(net, &old, &targets, &placed);
         }
         let constraint = OnCreases::new(net, &region, field, &sides, &roles, &placed, h, opts);
         smoothing = Some(relax_constrained(net, f, smooth, &constraint)?);
@@ -309,6 +295,21 @@ fn collapse<I: Implicit + ?Sized>(
             (n, lq.quad_region)
         }
         Err(_) => (0, quad_region),
+    }
+}
+
+/// The net's nodes at their first positions `old`, the placed ones at their targets.
+fn apply_placements(
+    net: &mut QuadNet,
+    old: &[Point3<f64>],
+    targets: &[Option<Point3<f64>>],
+    placed: &[bool],
+) {
+    net.nodes.clone_from_slice(old);
+    for (i, t) in targets.iter().enumerate() {
+        if let (true, Some(q)) = (placed[i], t) {
+            net.nodes[i] = *q;
+        }
     }
 }
 

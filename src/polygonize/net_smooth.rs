@@ -52,6 +52,17 @@ pub struct SmoothOptions {
 }
 
 impl SmoothOptions {
+    /// Positive `h` and `scale`, a step in (0, 1].
+    fn validate(&self) -> Result<()> {
+        if self.h > 0.0 && self.scale > 0.0 && self.step > 0.0 && self.step <= 1.0 {
+            Ok(())
+        } else {
+            Err(Error::InvalidOption(
+                "smoothing needs positive h and scale and a step in (0, 1]".into(),
+            ))
+        }
+    }
+
     pub fn new(scale: f64, h: f64) -> Self {
         SmoothOptions {
             scale,
@@ -92,18 +103,14 @@ pub fn project_and_smooth<I: Implicit + ?Sized>(
     f: &I,
     opt: &SmoothOptions,
 ) -> Result<SmoothReport> {
-    if !(opt.h > 0.0 && opt.scale > 0.0 && opt.step > 0.0 && opt.step <= 1.0) {
-        return Err(Error::InvalidOption(
-            "smoothing needs positive h and scale and a step in (0, 1]".into(),
-        ));
-    }
+    opt.validate()?;
     let newton = NewtonOptions::new(opt.scale, 0.5 * opt.h);
     let net_normals = net_normals(net);
     let (nodes, normals) =
         project_on_lines(f, &net.nodes, &net_normals, 1.5 * opt.h, &newton, None)?;
     net.nodes = nodes;
     let state = State::new(net, f, normals, opt);
-    Ok(relax_on_surface(net, f, opt, state, None))
+    relax_on_surface(net, f, opt, state, None)
 }
 
 /// What the relaxation must respect besides the surface: nodes that must not move and nodes
@@ -125,14 +132,10 @@ pub fn relax_constrained<I: Implicit + ?Sized>(
     opt: &SmoothOptions,
     constraint: &dyn NodeConstraint,
 ) -> Result<SmoothReport> {
-    if !(opt.h > 0.0 && opt.scale > 0.0 && opt.step > 0.0 && opt.step <= 1.0) {
-        return Err(Error::InvalidOption(
-            "smoothing needs positive h and scale and a step in (0, 1]".into(),
-        ));
-    }
+    opt.validate()?;
     let normals = super::net_quality::node_normals(f, &net.nodes);
     let state = State::new(net, f, normals, opt);
-    Ok(relax_on_surface(net, f, opt, state, Some(constraint)))
+    relax_on_surface(net, f, opt, state, Some(constraint))
 }
 
 /// The relaxation sweeps of [`project_and_smooth`] from nodes on the surface with unit
@@ -143,7 +146,7 @@ fn relax_on_surface<I: Implicit + ?Sized>(
     opt: &SmoothOptions,
     mut state: State,
     constraint: Option<&dyn NodeConstraint>,
-) -> SmoothReport {
+) -> Result<SmoothReport> {
     let newton = NewtonOptions::new(opt.scale, 0.5 * opt.h);
     let quality = |net: &QuadNet, st: &State| quality_with(net, &st.quad_n, &[0.0]);
     let projected = quality(net, &state);
@@ -160,17 +163,14 @@ fn relax_on_surface<I: Implicit + ?Sized>(
         iterations += 1;
         let moved = relax_step(net, &state.node_n, &pinned, opt.step);
         // A node that cannot be put back on the surface keeps its place.
-        let projected_moves = project_on_lines(
+        let (mut proj, mut normals) = project_on_lines(
             f,
             &moved,
             &state.node_n,
             0.5 * opt.h,
             &newton,
             Some((&net.nodes, &state.node_n)),
-        );
-        let Ok((mut proj, mut normals)) = projected_moves else {
-            break;
-        };
+        )?;
         if let Some(c) = constraint {
             let fixed: Vec<(usize, Point3<f64>)> = (0..proj.len())
                 .into_par_iter()
@@ -206,11 +206,11 @@ fn relax_on_surface<I: Implicit + ?Sized>(
         q.max_residual = residuals.iter().fold(0.0, |a: f64, &b| a.max(b));
         q
     };
-    SmoothReport {
+    Ok(SmoothReport {
         projected: fix(projected),
         smoothed: fix(best.0),
         iterations,
-    }
+    })
 }
 
 /// Unit normals at the nodes and at the quad centres.
