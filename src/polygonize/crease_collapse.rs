@@ -15,7 +15,8 @@
 //!
 //! A collapse is made only when it keeps the net manifold: b and d have no common neighbour
 //! but a and c (else an edge would be used three times), no quad but q holds both, neither is
-//! on the boundary of an open net, and m's valence stays at most [`MAX_VALENCE`]. Collapses
+//! on the boundary of an open net, m's valence stays at most [`MAX_VALENCE`] and a's and c's
+//! at least 3. Collapses
 //! within one round touch disjoint quads' nodes; rounds repeat until none is left (at most
 //! [`MAX_ROUNDS`]).
 
@@ -27,6 +28,17 @@ pub const MAX_VALENCE: usize = 7;
 /// Most collapse rounds.
 pub const MAX_ROUNDS: usize = 8;
 
+/// Which staircase quads [`collapse_staircases`] collapses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CollapseScope {
+    /// Every step.
+    All,
+    /// Only the steps at a corner: one of the step's three crease nodes a, b, c has quads of
+    /// three or more regions (the corner-cutting quad of a corner whose node has valence 4,
+    /// and the step it leaves beside the merged node, round after round).
+    AtCorners,
+}
+
 /// A quad net as lists, with a region per quad.
 pub struct LabelledQuads {
     pub nodes: Vec<Point3<f64>>,
@@ -37,11 +49,15 @@ pub struct LabelledQuads {
 /// Collapses the staircase quads of `net` (module doc); `pinned` nodes (an open net's
 /// boundary) are never merged. Returns how many quads were collapsed and the merged nodes
 /// (at their new indices: unreferenced nodes are removed at the end).
-pub fn collapse_staircases(net: &mut LabelledQuads, pinned: &[bool]) -> (usize, Vec<u32>) {
+pub fn collapse_staircases(
+    net: &mut LabelledQuads,
+    pinned: &[bool],
+    scope: CollapseScope,
+) -> (usize, Vec<u32>) {
     let mut merged = vec![false; net.nodes.len()];
     let mut collapsed = 0;
     for _ in 0..MAX_ROUNDS {
-        let n = collapse_round(net, pinned, &mut merged);
+        let n = collapse_round(net, pinned, scope, &mut merged);
         if n == 0 {
             break;
         }
@@ -63,7 +79,12 @@ fn key(a: u32, b: u32) -> [u32; 2] {
 }
 
 /// One round: every staircase quad whose nodes no earlier collapse of the round touched.
-fn collapse_round(net: &mut LabelledQuads, pinned: &[bool], merged: &mut [bool]) -> usize {
+fn collapse_round(
+    net: &mut LabelledQuads,
+    pinned: &[bool],
+    scope: CollapseScope,
+    merged: &mut [bool],
+) -> usize {
     let mut edge_quads: HashMap<[u32; 2], Vec<usize>> = HashMap::new();
     let mut node_quads: HashMap<u32, Vec<usize>> = HashMap::new();
     for (q, quad) in net.quads.iter().enumerate() {
@@ -75,6 +96,16 @@ fn collapse_round(net: &mut LabelledQuads, pinned: &[bool], merged: &mut [bool])
             node_quads.entry(quad[k]).or_default().push(q);
         }
     }
+    // Corner nodes: quads of three or more regions.
+    let is_corner = |v: u32| {
+        let regions: HashSet<u32> = node_quads
+            .get(&v)
+            .map_or(&[][..], |v| v.as_slice())
+            .iter()
+            .map(|&q| net.quad_region[q])
+            .collect();
+        regions.len() >= 3
+    };
     let other = |q: usize, a: u32, b: u32| -> Option<usize> {
         edge_quads
             .get(&key(a, b))
@@ -124,6 +155,9 @@ fn collapse_round(net: &mut LabelledQuads, pinned: &[bool], merged: &mut [bool])
             if pinned[b as usize] || pinned[d as usize] {
                 continue;
             }
+            if scope == CollapseScope::AtCorners && ![a, b, c].into_iter().any(is_corner) {
+                continue;
+            }
             let (nb, nd) = (neighbours(b), neighbours(d));
             let common: Vec<u32> = nb.intersection(&nd).copied().collect();
             if common.iter().any(|&x| x != a && x != c) {
@@ -134,6 +168,11 @@ fn collapse_round(net: &mut LabelledQuads, pinned: &[bool], merged: &mut [bool])
                 continue;
             }
             if qb.len() + qd.len() - 2 > MAX_VALENCE {
+                continue;
+            }
+            // a and c lose a quad each: at valence 3 they would keep two, which share two
+            // sides.
+            if [a, c].iter().any(|v| node_quads[v].len() <= 3) {
                 continue;
             }
             // The merged node at the midpoint (put on the crease by the caller).
@@ -271,7 +310,7 @@ mod tests {
             .map(|(p, _)| p.x == 0.0 || p.y == 0.0 || p.x == n as f64 || p.y == n as f64)
             .collect();
         let quads_before = net.quads.len();
-        let (collapsed, merged) = collapse_staircases(&mut net, &pinned);
+        let (collapsed, merged) = collapse_staircases(&mut net, &pinned, CollapseScope::All);
         assert!(collapsed > 0);
         assert!(!merged.is_empty() && merged.len() <= collapsed);
         assert_eq!(net.quads.len(), quads_before - collapsed);
@@ -285,6 +324,18 @@ mod tests {
             }
         }
         assert!(uses.values().all(|&u| u <= 2));
+        // No node inside the grid is left with two quads (which would share two sides).
+        let mut valence: HashMap<u32, usize> = HashMap::new();
+        for quad in &net.quads {
+            for &v in quad {
+                *valence.entry(v).or_default() += 1;
+            }
+        }
+        for (&v, &k) in &valence {
+            let p = net.nodes[v as usize];
+            let inside = p.x > 0.0 && p.y > 0.0 && p.x < n as f64 && p.y < n as f64;
+            assert!(!inside || k >= 3, "node {v} at {p:?} with {k} quads");
+        }
         crate::polygonize::QuadNet::new_open(net.nodes.clone(), net.quads.clone()).unwrap();
         // Most steps go (measured: 17 -> 7; the others are at the pinned border or would give
         // a node of valence above MAX_VALENCE, on this grid whose merged nodes stay at

@@ -1,4 +1,5 @@
-//! Exact sharp shapes: an axis-aligned box, a rotated box, a plate with a round hole.
+//! Exact sharp shapes: an axis-aligned box, a rotated box, a plate with a round hole, a box
+//! with a pocket (concave edges and corners).
 
 use super::*;
 use crate::polygonize::net_smooth::project_and_smooth;
@@ -13,11 +14,15 @@ type Face = Box<dyn Fn(&Point3<f64>) -> (f64, Vector3<f64>) + Sync>;
 
 struct SharpShape {
     faces: Vec<Face>,
+    /// A pocket cut out of the solid: the solid's function is max(max_k g_k, min_j p_j), the
+    /// pocket's faces p_j positive inside the solid. Their regions follow the faces'.
+    pocket: Vec<Face>,
 }
 
 impl SharpShape {
     fn active(&self, x: &Point3<f64>) -> (u32, f64, Vector3<f64>) {
-        self.faces
+        let outer = self
+            .faces
             .iter()
             .enumerate()
             .map(|(k, g)| {
@@ -25,7 +30,30 @@ impl SharpShape {
                 (k as u32, v, d)
             })
             .max_by(|a, b| a.1.total_cmp(&b.1))
-            .expect("faces")
+            .expect("faces");
+        let n = self.faces.len() as u32;
+        let pocket = self
+            .pocket
+            .iter()
+            .enumerate()
+            .map(|(k, g)| {
+                let (v, d) = g(x);
+                (n + k as u32, v, d)
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match pocket {
+            Some(p) if p.1 > outer.1 => p,
+            _ => outer,
+        }
+    }
+
+    fn face(&self, region: u32) -> &Face {
+        let k = region as usize;
+        if k < self.faces.len() {
+            &self.faces[k]
+        } else {
+            &self.pocket[k - self.faces.len()]
+        }
     }
 
     /// A box of half extents `half` centred at `c`, turned by `rot`.
@@ -37,7 +65,24 @@ impl SharpShape {
                 faces.push(Box::new(move |x: &Point3<f64>| (n.dot(&(x - c)) - hk, n)));
             }
         }
-        SharpShape { faces }
+        SharpShape {
+            faces,
+            pocket: Vec::new(),
+        }
+    }
+
+    /// An axis-aligned box of half extents `half` centred at the origin, with the box of half
+    /// extents `ph` centred at `pc` (reaching past the top) cut out of it.
+    fn box_with_pocket(half: [f64; 3], pc: Point3<f64>, ph: [f64; 3]) -> SharpShape {
+        let mut s = SharpShape::cuboid(Point3::origin(), half, Rotation3::identity());
+        for (k, &hk) in ph.iter().enumerate() {
+            for sign in [-1.0, 1.0] {
+                let n = Vector3::ith(k, sign);
+                s.pocket
+                    .push(Box::new(move |x: &Point3<f64>| (hk - n.dot(&(x - pc)), -n)));
+            }
+        }
+        s
     }
 
     /// The square plate |x|, |y| <= a, |z| <= t with a round hole of radius r along z.
@@ -69,12 +114,22 @@ impl SideField for SharpShape {
         self.active(x).0
     }
     fn side(&self, region: u32, x: &Point3<f64>) -> (f64, Vector3<f64>) {
-        self.faces[region as usize](x)
+        self.face(region)(x)
     }
 }
 
 /// The net of `shape` at voxel edge `h`, projected and smoothed, then put on the creases.
 fn crease_net(shape: &SharpShape, c: Point3<f64>, rad: f64, h: f64) -> (QuadNet, CreaseNet) {
+    crease_net_with(shape, c, rad, h, &CreaseNodeOptions::default())
+}
+
+fn crease_net_with(
+    shape: &SharpShape,
+    c: Point3<f64>,
+    rad: f64,
+    h: f64,
+    opts: &CreaseNodeOptions,
+) -> (QuadNet, CreaseNet) {
     let b = aabb(
         [c.x - rad, c.y - rad, c.z - rad],
         [c.x + rad, c.y + rad, c.z + rad],
@@ -83,15 +138,7 @@ fn crease_net(shape: &SharpShape, c: Point3<f64>, rad: f64, h: f64) -> (QuadNet,
     let mut v = build_voxel_net(shape, &seeds, &b, &VoxelNetOptions::new(h)).unwrap();
     let smooth = SmoothOptions::new(b.diagonal(), h);
     project_and_smooth(&mut v.net, shape, &smooth).unwrap();
-    let out = place_on_creases(
-        &mut v.net,
-        shape,
-        shape,
-        None,
-        &smooth,
-        &CreaseNodeOptions::default(),
-    )
-    .unwrap();
+    let out = place_on_creases(&mut v.net, shape, shape, None, &smooth, opts).unwrap();
     eprintln!("{:?}", out.report);
     (v.net, out)
 }
@@ -119,6 +166,16 @@ fn crease_edges(net: &QuadNet, quad_region: &[u32]) -> Vec<(Point3<f64>, Point3<
 fn assert_no_folds(shape: &SharpShape, net: &QuadNet, h: f64) {
     let folded = folded_quads(net, shape, 4.0, h);
     assert_eq!(folded.iter().filter(|&&b| b).count(), 0, "folded quads");
+}
+
+/// A node of the net on the corner `end`.
+fn assert_node_on(net: &QuadNet, end: &Point3<f64>) {
+    let d = net
+        .nodes
+        .iter()
+        .map(|p| (p - end).norm())
+        .fold(f64::INFINITY, f64::min);
+    assert!(d < 1e-6, "no node on the corner {end:?} ({d:.2e})");
 }
 
 /// The box's 12 edges, as segments.
@@ -170,12 +227,7 @@ fn box_case(rot: Rotation3<f64>, aligned: bool) {
     }
     for e in &edges {
         for end in e {
-            let d = net
-                .nodes
-                .iter()
-                .map(|p| (p - end).norm())
-                .fold(f64::INFINITY, f64::min);
-            assert!(d < 1e-6, "no node on the corner {end:?} ({d:.2e})");
+            assert_node_on(&net, end);
         }
     }
     assert_eq!(out.report.placed_corner_nodes, 8);
@@ -243,4 +295,47 @@ fn a_plate_gets_the_rims_of_its_round_hole() {
     let per_rim = 2.0 * std::f64::consts::PI * r / h;
     assert!(rim_nodes as f64 >= 1.5 * per_rim, "{rim_nodes} rim nodes");
     assert_no_folds(&shape, &net, h);
+}
+
+/// The corners of the box with a pocket of [`a_pocket_gets_its_concave_corners`]: the box's 8,
+/// the pocket's 4 on the floor (concave) and 4 on the rim.
+fn pocket_corners(half: [f64; 3], pc: Point3<f64>, ph: [f64; 3]) -> Vec<Point3<f64>> {
+    let mut out = Vec::new();
+    for sx in [-1.0, 1.0] {
+        for sy in [-1.0, 1.0] {
+            for sz in [-1.0, 1.0] {
+                out.push(Point3::new(sx * half[0], sy * half[1], sz * half[2]));
+            }
+            let (x, y) = (pc.x + sx * ph[0], pc.y + sy * ph[1]);
+            out.push(Point3::new(x, y, pc.z - ph[2]));
+            out.push(Point3::new(x, y, half[2]));
+        }
+    }
+    out
+}
+
+#[test]
+fn a_pocket_gets_its_concave_corners() {
+    // The pocket's walls between grid planes, so that the voxel net cuts its concave edges
+    // and corners; with the labels chosen for the least moves every corner of the part
+    // carries a node and no quad folds.
+    let half = [1.0, 0.8, 0.5];
+    let (pc, ph) = (Point3::new(0.06, -0.03, 0.5), [0.52, 0.43, 0.33]);
+    let shape = SharpShape::box_with_pocket(half, pc, ph);
+    let h = 0.1;
+    let opts = CreaseNodeOptions {
+        least_moves: true,
+        ..Default::default()
+    };
+    let c = Point3::new(0.013, -0.021, 0.017);
+    let (net, out) = crease_net_with(&shape, c, 1.4, h, &opts);
+    assert_no_folds(&shape, &net, h);
+    for end in pocket_corners(half, pc, ph) {
+        assert_node_on(&net, &end);
+    }
+    assert_eq!(out.report.placed_corner_nodes, 16);
+    let steps = (0..net.quads.len())
+        .filter(|&q| crate::polygonize::crease_labels::is_step(&net, &out.quad_region, q))
+        .count();
+    assert_eq!(steps, 0, "quads with three corners on one crease");
 }
