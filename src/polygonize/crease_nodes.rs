@@ -7,21 +7,22 @@
 //! middle of quads and the patches round it off. On the sharp implicit
 //! ([`crate::implicit::sharp`], one function per side in the cells a crease crosses):
 //!
-//! 1. **Quad regions.** Each quad takes the region of its centroid: of the regions near it,
-//!    the one whose surface passes nearest ([`LocalSides::region`], the surfaces fitted to
-//!    the data, else [`SideField::region`]). Across a concave crease the voxel net's quads cut
-//!    the corner; the centroid of such a quad lies nearer the side whose nodes are farther
-//!    from the crease, so the quad joins that side and the crease nodes are the nearer ones. A quad whose label differs
-//!    from at least three of its edge neighbours' common label takes theirs (label noise
-//!    beside a crease), round after round until none changes (at most [`RELABEL_ROUNDS`]).
-//!    Then, when asked ([`CreaseNodeOptions::collapse_staircases`], off by default), the
-//!    staircase a crease at an angle to the grid makes is collapsed
-//!    ([`super::crease_collapse`]), so that no quad has three corners on one crease.
-//! 2. **Node roles.** A node whose quads carry one region is a face node, two a crease node,
-//!    three or more a corner node: the rank (1, 2, 3) of dual contouring's quadric error
-//!    function at the node (Ju, Losasso, Schaefer and Warren 2002), read off the labels rather
-//!    than off the singular values of the crossings' normals, which beside a crease rounded by
-//!    noise are not clearly rank 2.
+//! 1. **Quad regions** ([`super::crease_labels`]). Each quad takes the region of its
+//!    centroid: of the regions near it, the one whose surface passes nearest
+//!    ([`LocalSides::region`], the surfaces fitted to the data, else [`SideField::region`]);
+//!    lone labels take their neighbours'. Then (by default, [`CreaseNodeOptions::least_moves`])
+//!    the quads beside a crease take the labels for which the nodes move least onto their
+//!    creases, corners and faces and the fewest quads have three corners on one crease
+//!    ([`refine_by_moves`]): the strip of quads the voxel net cuts across a crease, and the
+//!    quad that cuts across a corner, join one side consistently. Then, when asked
+//!    ([`CreaseNodeOptions::collapse_staircases`], off by default), the staircase a crease at
+//!    an angle to the grid makes is collapsed ([`super::crease_collapse`]), so that no quad
+//!    has three corners on one crease.
+//! 2. **Node roles** ([`super::crease_labels::node_role`]). A node whose quads carry one
+//!    region is a face node, two a crease node, three or more a corner node: the rank (1, 2,
+//!    3) of dual contouring's quadric error function at the node (Ju, Losasso, Schaefer and
+//!    Warren 2002), read off the labels rather than off the singular values of the crossings'
+//!    normals, which beside a crease rounded by noise are not clearly rank 2.
 //! 3. **Placement.** A crease node between regions A and B goes to the nearest point of the
 //!    crease f_A = f_B = 0, a corner node to the point where its three regions' surfaces meet
 //!    ([`meet_point`]). The sides f_A, f_B, f_C are the regions' surfaces fitted to the data
@@ -107,7 +108,8 @@ pub struct CreaseNodesReport {
     /// Quads and nodes of the net.
     pub quads: usize,
     pub nodes: usize,
-    /// Quads whose centroid's region was replaced by their neighbours' (step 1).
+    /// Quads whose centroid's region was replaced: by their neighbours', or for the least
+    /// node moves (step 1).
     pub relabelled_quads: usize,
     /// Quads of the staircases collapsed (step 1b).
     pub collapsed_quads: usize,
