@@ -34,10 +34,15 @@ pub enum CollapseScope {
     /// Every step.
     All,
     /// Only the steps at a corner: one of the step's three crease nodes a, b, c has quads of
-    /// three or more regions (the corner-cutting quad of a corner whose node has valence 4,
-    /// and the step it leaves beside the merged node, round after round).
+    /// three or more regions whose surfaces meet near it (the caller's [`CornerOk`]): the
+    /// corner-cutting quad of a corner whose node has valence 4, and the step it leaves beside
+    /// the merged node, round after round.
     AtCorners,
 }
+
+/// Whether three regions' surfaces meet near a node (a corner of the part, not three regions
+/// side by side such as a chamfer narrower than a quad between two faces).
+pub type CornerOk<'a> = dyn Fn(&Point3<f64>, &[u32]) -> bool + 'a;
 
 /// A quad net as lists, with a region per quad.
 pub struct LabelledQuads {
@@ -53,11 +58,12 @@ pub fn collapse_staircases(
     net: &mut LabelledQuads,
     pinned: &[bool],
     scope: CollapseScope,
+    corner_ok: &CornerOk<'_>,
 ) -> (usize, Vec<u32>) {
     let mut merged = vec![false; net.nodes.len()];
     let mut collapsed = 0;
     for _ in 0..MAX_ROUNDS {
-        let n = collapse_round(net, pinned, scope, &mut merged);
+        let n = collapse_round(net, pinned, scope, corner_ok, &mut merged);
         if n == 0 {
             break;
         }
@@ -83,6 +89,7 @@ fn collapse_round(
     net: &mut LabelledQuads,
     pinned: &[bool],
     scope: CollapseScope,
+    corner_ok: &CornerOk<'_>,
     merged: &mut [bool],
 ) -> usize {
     let mut edge_quads: HashMap<[u32; 2], Vec<usize>> = HashMap::new();
@@ -96,16 +103,30 @@ fn collapse_round(
             node_quads.entry(quad[k]).or_default().push(q);
         }
     }
-    // Corner nodes: quads of three or more regions.
-    let is_corner = |v: u32| {
-        let regions: HashSet<u32> = node_quads
-            .get(&v)
-            .map_or(&[][..], |v| v.as_slice())
+    // Corner nodes: quads of three or more regions, whose three most frequent regions'
+    // surfaces meet near the node (`corner_ok`).
+    let corners: HashSet<u32> = if scope == CollapseScope::AtCorners {
+        node_quads
             .iter()
-            .map(|&q| net.quad_region[q])
-            .collect();
-        regions.len() >= 3
+            .filter_map(|(&v, qs)| {
+                let mut count: HashMap<u32, usize> = HashMap::new();
+                for &q in qs {
+                    *count.entry(net.quad_region[q]).or_default() += 1;
+                }
+                if count.len() < 3 {
+                    return None;
+                }
+                let mut by: Vec<(u32, usize)> = count.into_iter().collect();
+                by.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+                let mut three = [by[0].0, by[1].0, by[2].0];
+                three.sort_unstable();
+                corner_ok(&net.nodes[v as usize], &three).then_some(v)
+            })
+            .collect()
+    } else {
+        HashSet::new()
     };
+    let is_corner = |v: u32| corners.contains(&v);
     let other = |q: usize, a: u32, b: u32| -> Option<usize> {
         edge_quads
             .get(&key(a, b))
@@ -310,7 +331,8 @@ mod tests {
             .map(|(p, _)| p.x == 0.0 || p.y == 0.0 || p.x == n as f64 || p.y == n as f64)
             .collect();
         let quads_before = net.quads.len();
-        let (collapsed, merged) = collapse_staircases(&mut net, &pinned, CollapseScope::All);
+        let (collapsed, merged) =
+            collapse_staircases(&mut net, &pinned, CollapseScope::All, &|_, _| true);
         assert!(collapsed > 0);
         assert!(!merged.is_empty() && merged.len() <= collapsed);
         assert_eq!(net.quads.len(), quads_before - collapsed);
