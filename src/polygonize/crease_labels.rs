@@ -182,8 +182,8 @@ pub fn refine_by_moves(
     let mut cache: HashMap<(usize, NodeRole), f64> = HashMap::new();
     for _ in 0..MOVE_ROUNDS {
         // The node costs the round's evaluations ask for with the labels as they are, computed
-        // in parallel (the fits to the data are the work); the few that labels changed during
-        // the round make new ones are computed as they come.
+        // in parallel (the fits to the data are the work); the few that labels changed earlier
+        // in the round call for are computed as they come.
         let mut wanted: Vec<(usize, NodeRole)> = (0..net.quads.len())
             .into_par_iter()
             .flat_map_iter(|q| {
