@@ -164,24 +164,19 @@ pub fn place_on_creases<I: Implicit + ?Sized>(
         data.and_then(|d| d.region(x))
             .unwrap_or_else(|| field.region(x))
     };
+    // Where crease and corner nodes go: the labels' costs, the corners' test and step 3.
+    let placement = Placement {
+        data,
+        field,
+        h,
+        opts,
+    };
     let (mut quad_region, mut relabelled_quads) = quad_regions(net, &region);
     if opts.least_moves {
-        let cost = Placement {
-            data,
-            field,
-            h,
-            opts,
-        };
-        relabelled_quads += refine_by_moves(net, &mut quad_region, &cost, h);
+        relabelled_quads += refine_by_moves(net, &mut quad_region, &placement, h);
     }
     let mut collapsed_quads = 0;
     if let Some(scope) = opts.collapse_staircases {
-        let placement = Placement {
-            data,
-            field,
-            h,
-            opts,
-        };
         let corner_ok = |p: &Point3<f64>, regions: &[u32]| placement.target(p, regions).is_some();
         (collapsed_quads, quad_region) = collapse(net, f, quad_region, smooth, scope, &corner_ok);
     }
@@ -195,12 +190,6 @@ pub fn place_on_creases<I: Implicit + ?Sized>(
     };
 
     // Step 3: placement, on the data's sides when they can be fitted, else the implicit's.
-    let placement = Placement {
-        data,
-        field,
-        h,
-        opts,
-    };
     let placements: Vec<Option<(Point3<f64>, Sides)>> = (0..net.nodes.len())
         .into_par_iter()
         .map(|i| match &roles[i] {
