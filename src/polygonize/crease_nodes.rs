@@ -19,7 +19,8 @@
 //!    [`super::crease_collapse`]): at a corner whose node has four quads, the corner-cutting
 //!    quad is a step of one crease whichever side it joins. Corners count only where their
 //!    three regions' surfaces meet near the node (not a chamfer narrower than a quad between
-//!    two faces, whose three planes share a direction).
+//!    two faces, whose three planes share a direction), and the collapse is undone when it
+//!    leaves fewer such corners than there were.
 //! 2. **Node roles** ([`super::crease_labels::node_role`]). A node whose quads carry one
 //!    region is a face node, two a crease node, three or more a corner node: the rank (1, 2,
 //!    3) of dual contouring's quadric error function at the node (Ju, Losasso, Schaefer and
@@ -77,8 +78,9 @@ pub struct CreaseNodeOptions {
     /// ([`super::crease_collapse`]): `None` none, else those of the scope. Default: the steps
     /// at corners whose three surfaces meet near the node (on 12 machined parts after the
     /// least-move labels, crease p95 bracket.stl 1.4e-4 -> 1e-15, vblock 4.4e-3 -> 1.3e-3,
-    /// lplate, wedge and hexnut lower, stepped 3.2e-3 -> 3.9e-3, the rest the same); every step
-    /// worsens block, tilted, wedge, slotplate and stepped 3-7x.
+    /// lplate, wedge and hexnut lower, the rest the same; a collapse that leaves fewer corners
+    /// within reach is undone); every step worsens block, tilted, wedge, slotplate and stepped
+    /// 3-7x.
     pub collapse_staircases: Option<CollapseScope>,
     /// Choose the labels of the quads beside a crease for the least node moves and steps
     /// ([`super::crease_labels::refine_by_moves`]; default true: on 12 machined parts crease
@@ -178,7 +180,16 @@ pub fn place_on_creases<I: Implicit + ?Sized>(
     let mut collapsed_quads = 0;
     if let Some(scope) = opts.collapse_staircases {
         let corner_ok = |p: &Point3<f64>, regions: &[u32]| placement.target(p, regions).is_some();
+        let (before, labels_before) = (net.clone(), quad_region.clone());
         (collapsed_quads, quad_region) = collapse(net, f, quad_region, smooth, scope, &corner_ok);
+        // A collapse that leaves fewer corners within reach of their node (a chain of merges
+        // that carried a corner's label away from the corner) is undone.
+        if collapsed_quads > 0
+            && reachable_corners(net, &quad_region, &placement)
+                < reachable_corners(&before, &labels_before, &placement)
+        {
+            (*net, quad_region, collapsed_quads) = (before, labels_before, 0);
+        }
     }
     let roles = node_roles(net, &quad_region);
     let mut report = CreaseNodesReport {
@@ -309,6 +320,18 @@ impl MoveCost for Placement<'_> {
             r => self.target(p, r.regions()).map(|(q, _)| (q - p).norm()),
         }
     }
+}
+
+/// How many corner nodes of `net` have their corner within reach.
+fn reachable_corners(net: &QuadNet, quad_region: &[u32], placement: &Placement) -> usize {
+    node_roles(net, quad_region)
+        .iter()
+        .enumerate()
+        .filter(|(i, r)| {
+            matches!(r, NodeRole::Corner(_))
+                && placement.target(&net.nodes[*i], r.regions()).is_some()
+        })
+        .count()
 }
 
 /// Step 1b: the staircase quads collapsed ([`collapse_staircases`]), the merged nodes
