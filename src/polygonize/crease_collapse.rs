@@ -20,6 +20,7 @@
 //! within one round touch disjoint quads' nodes; rounds repeat until none is left (at most
 //! [`MAX_ROUNDS`]).
 
+use super::crease_labels::{role_of, NodeRole};
 use nalgebra::Point3;
 use std::collections::{HashMap, HashSet};
 
@@ -108,20 +109,14 @@ fn collapse_round(
     let corners: HashSet<u32> = if scope == CollapseScope::AtCorners {
         node_quads
             .iter()
-            .filter_map(|(&v, qs)| {
-                let mut count: HashMap<u32, usize> = HashMap::new();
-                for &q in qs {
-                    *count.entry(net.quad_region[q]).or_default() += 1;
-                }
-                if count.len() < 3 {
-                    return None;
-                }
-                let mut by: Vec<(u32, usize)> = count.into_iter().collect();
-                by.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
-                let mut three = [by[0].0, by[1].0, by[2].0];
-                three.sort_unstable();
-                corner_ok(&net.nodes[v as usize], &three).then_some(v)
-            })
+            .filter_map(
+                |(&v, qs)| match role_of(qs.iter().map(|&q| net.quad_region[q])) {
+                    NodeRole::Corner(three) => {
+                        corner_ok(&net.nodes[v as usize], &three).then_some(v)
+                    }
+                    _ => None,
+                },
+            )
             .collect()
     } else {
         HashSet::new()

@@ -116,12 +116,17 @@ pub fn node_role(net: &QuadNet, quad_region: &[u32], i: usize) -> NodeRole {
 
 /// [`node_role`] with quad `over.0` labelled `over.1`.
 fn role_with(net: &QuadNet, quad_region: &[u32], i: usize, over: Option<(usize, u32)>) -> NodeRole {
+    role_of(net.node_quads(i).iter().map(|&q| match over {
+        Some((o, r)) if o == q as usize => r,
+        _ => quad_region[q as usize],
+    }))
+}
+
+/// The role of a node whose quads carry `regions` (one entry per quad): one region a face,
+/// two a crease, three or more a corner of the three with the most quads (ties by region).
+pub fn role_of(regions: impl IntoIterator<Item = u32>) -> NodeRole {
     let mut n: BTreeMap<u32, usize> = BTreeMap::new();
-    for &q in net.node_quads(i) {
-        let r = match over {
-            Some((o, r)) if o == q as usize => r,
-            _ => quad_region[q as usize],
-        };
+    for r in regions {
         *n.entry(r).or_default() += 1;
     }
     let mut by_count: Vec<(u32, usize)> = n.into_iter().collect();
@@ -151,9 +156,9 @@ pub fn node_roles(net: &QuadNet, quad_region: &[u32]) -> Vec<NodeRole> {
 
 /// The distances of step 2's energy.
 pub trait MoveCost: Sync {
-    /// How far node `i` (at `p`) moves for `role`, or `None` when it has no place within
-    /// reach (a crease or corner node whose sides do not meet near it).
-    fn distance(&self, i: usize, p: &Point3<f64>, role: &NodeRole) -> Option<f64>;
+    /// How far a node at `p` moves for `role`, or `None` when it has no place within reach
+    /// (a crease or corner node whose sides do not meet near it).
+    fn distance(&self, p: &Point3<f64>, role: &NodeRole) -> Option<f64>;
 }
 
 /// Step 2: the labels of the quads beside a crease chosen for the least node moves and steps
@@ -166,7 +171,7 @@ pub fn refine_by_moves(
 ) -> usize {
     let first = quad_region.to_vec();
     let node_cost = |i: usize, role: &NodeRole| -> f64 {
-        let d = cost.distance(i, &net.nodes[i], role).unwrap_or(h);
+        let d = cost.distance(&net.nodes[i], role).unwrap_or(h);
         d * d
     };
     // The other labels quad q may take.
