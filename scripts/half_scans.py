@@ -31,6 +31,14 @@ def read_obj(path):
     return np.array(v), np.array(f)
 
 
+def points_in(a, b, c, rng):
+    """One uniform random point in each triangle (a[i], b[i], c[i]) (folded barycentrics)."""
+    u, w = rng.random(len(a)), rng.random(len(a))
+    flip = u + w > 1
+    u[flip], w[flip] = 1 - u[flip], 1 - w[flip]
+    return a + u[:, None] * (b - a) + w[:, None] * (c - a)
+
+
 def half(v, f, axis, spacing_rel, seed=11):
     diag = np.linalg.norm(v.max(0) - v.min(0))
     s = spacing_rel * diag
@@ -38,10 +46,7 @@ def half(v, f, axis, spacing_rel, seed=11):
     area = np.linalg.norm(np.cross(b - a, c - a), axis=1) / 2
     rng = np.random.default_rng(seed)
     fi = np.repeat(np.arange(len(f)), rng.poisson(area / (s * s)))
-    u, w = rng.random(len(fi)), rng.random(len(fi))
-    flip = u + w > 1
-    u[flip], w[flip] = 1 - u[flip], 1 - w[flip]
-    p = a[fi] + u[:, None] * (b[fi] - a[fi]) + w[:, None] * (c[fi] - a[fi])
+    p = points_in(a[fi], b[fi], c[fi], rng)
     p += rng.normal(0, 1e-4 * diag, p.shape)
     return p[p[:, axis] > v[:, axis].mean()]
 

@@ -16,20 +16,7 @@ import sys
 
 import numpy as np
 
-
-def read_obj(path):
-    v, f = [], []
-    with open(path) as fh:
-        for line in fh:
-            t = line.split()
-            if not t:
-                continue
-            if t[0] == "v":
-                v.append([float(x) for x in t[1:4]])
-            elif t[0] == "f":
-                idx = [int(x.split("/")[0]) - 1 for x in t[1:]]
-                f.extend([idx[0], idx[k], idx[k + 1]] for k in range(1, len(idx) - 1))
-    return np.array(v), np.array(f)
+from half_scans import points_in, read_obj  # same folder: the mesh reading and sampling
 
 
 def view(v, f, n_points, axis, sign, seed=7):
@@ -42,10 +29,7 @@ def view(v, f, n_points, axis, sign, seed=7):
     normal = cr / (2 * area[:, None])
     rng = np.random.default_rng(seed)
     fi = rng.choice(len(area), size=n_points, p=area / area.sum())
-    u, w = rng.random(n_points), rng.random(n_points)
-    flip = u + w > 1
-    u[flip], w[flip] = 1 - u[flip], 1 - w[flip]
-    p = a[fi] + u[:, None] * (b[fi] - a[fi]) + w[:, None] * (c[fi] - a[fi])
+    p = points_in(a[fi], b[fi], c[fi], rng)
     p += rng.normal(0, 2e-4 * diag, p.shape)
     n = normal[fi]
     seen = sign * n[:, axis] >= 0
