@@ -225,6 +225,7 @@ mod tests {
                 deviation_cell: 0.0,
                 unprojected: 0,
                 max_residual: 0.0,
+                coons_rows: false,
                 measured: true,
             });
             let (cu, cv) = (dir(p) * len, dir(p + 1) * len);

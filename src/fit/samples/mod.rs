@@ -45,7 +45,11 @@
 //! points projected onto f = 0 were tried first: on patches wrapping the rim of a part thinner
 //! than a patch, like the bunny's ears, neighbouring points landed on different sides and the
 //! grid folded as it was refined.) If a row cannot be found, its points are the Coons points
-//! moved onto f = 0 along the Coons normal.
+//! moved onto f = 0 along the Coons normal. In an open fit, rows that stray from the data are
+//! replaced row by row ([`NearData`]), and a patch whose rows together cover over three times
+//! the area of its Coons patch with cells away from the data (rows running round an ear or a
+//! horn beside the patch, past the data's rim) takes the Coons rows instead
+//! (`patch::unballoon`).
 //!
 //! **Cross-boundary derivatives.** d/du at the ends of interior rows is the row curve's own
 //! tangent (exact for that curve, in the implicit's tangent plane); at the corners it is the
@@ -170,6 +174,9 @@ pub struct PatchSamples {
     /// the implicit jumps across zero and a sample sits on the jump), from the root finders'
     /// last evaluations ([`EdgeSamples::residuals`]).
     pub max_residual: f64,
+    /// Whether the interior rows are the Coons rows projected onto f = 0 because the section
+    /// rows ballooned (open fits only; see `patch::unballoon`).
+    pub coons_rows: bool,
     /// Whether the three deviations were measured (else they are 0; see
     /// [`SampleOptions::measure`]).
     pub measured: bool,
@@ -218,6 +225,10 @@ pub struct SampleReport {
     pub edges_projected_chord: usize,
     /// Interior samples left off the surface (see [`PatchSamples::unprojected`]).
     pub unprojected_samples: usize,
+    /// Open fits: patches whose section rows covered more than three times the area of the
+    /// Coons patch of their sides (rows running round a part beside the patch) and were made
+    /// again from the Coons patch.
+    pub coons_row_patches: usize,
     /// Largest |f| / |grad f| over all samples, and the patches with a sample farther than
     /// 1e-9 of the model size from f = 0 (implicit defects: f jumping across zero).
     pub max_sample_residual: f64,
@@ -507,6 +518,7 @@ fn finish(
             .filter(|e| e.method == EdgeMethod::ProjectedChord)
             .count(),
         unprojected_samples: patches.iter().map(|p| p.unprojected).sum(),
+        coons_row_patches: patches.iter().filter(|p| p.coons_rows).count(),
         max_sample_residual: patches.iter().map(|p| p.max_residual).fold(0.0, f64::max),
         patches_off_surface: patches
             .iter()

@@ -39,6 +39,11 @@ impl<'a> NearData<'a> {
         NearData { data, radius }
     }
 
+    /// Whether `p` lies farther than `radius` from the data.
+    pub(super) fn beyond(&self, p: &Point3<f64>) -> bool {
+        self.data.nearest(p).1 > self.radius
+    }
+
     /// Distance from the data of the farthest of `points`.
     fn farthest<'p>(&self, points: impl IntoIterator<Item = &'p Point3<f64>>) -> f64 {
         points
