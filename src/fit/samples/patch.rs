@@ -187,13 +187,18 @@ impl Coons<'_> {
     }
 
     /// Row j as the Coons points themselves, all left off f = 0 (the last resort of
-    /// [`unballoon`]), with the Coons normals.
-    fn row_raw(&self, j: usize, pu: &[f64], v: f64) -> Row {
+    /// [`unballoon`]), with the Coons normals and the largest |f| / |grad f| of its points (how
+    /// far off they are, for the report).
+    fn row_raw<I: Implicit + ?Sized>(&self, f: &I, j: usize, pu: &[f64], v: f64) -> Row {
         let s = pu.len() - 1;
         let row: Vec<Point3<f64>> = (0..=s).map(|i| self.point(i, j, pu[i], v)).collect();
         let normals = (0..=s).map(|i| self.normal(i, j, pu[i], v)).collect();
+        let worst = row[1..s].iter().fold(0.0, |w: f64, p| {
+            let (val, g) = f.value_and_gradient(p);
+            w.max(residual(val, &g))
+        });
         let (d0, d1) = self.row_ends(j, v);
-        (row, normals, d0, d1, s.saturating_sub(1), 0.0)
+        (row, normals, d0, d1, s.saturating_sub(1), worst)
     }
 
     /// Row j from Coons points moved onto f = 0 along the Coons normal (kept where that fails),
@@ -463,7 +468,7 @@ pub(super) fn build_patch<I: Implicit + ?Sized>(
                     .map(|j| coons.row_fallback(f, j, &pu, pv[j], tol, opt.scale))
                     .collect()
             },
-            || (1..t).map(|j| coons.row_raw(j, &pu, pv[j])).collect(),
+            || (1..t).map(|j| coons.row_raw(f, j, &pu, pv[j])).collect(),
         ),
         None => (rows, false),
     };
@@ -662,6 +667,11 @@ mod tests {
             corners: [o, x, xy, y],
         };
         let pu = uniform_params(n);
+        // The implicit the raw rows are reported against: the plane z = 0.25.
+        let plane = crate::polygonize::test_shapes::Sphere {
+            c: Point3::new(0.5, 0.5, -1e6),
+            r: 1e6 + 0.25,
+        };
         // The data lie on the square: a cell centre more than 0.5 off the plane is away.
         let run = |rows: Vec<Row>, projected: &dyn Fn() -> Vec<Row>, raw: &dyn Fn() -> Vec<Row>| {
             unballoon(&coons, rows, &pu, &pu, |c| c.z.abs() > 0.5, projected, raw)
@@ -691,11 +701,14 @@ mod tests {
         assert_eq!(flat[0].0[1].z, 0.01);
         // ... the raw Coons rows when the projected ones are as far off ...
         let (raw, replaced) = run(rows(n, lifted), &|| rows(n, |_, _| 1.5), &|| {
-            (1..n).map(|j| coons.row_raw(j, &pu, pu[j])).collect()
+            (1..n)
+                .map(|j| coons.row_raw(&plane, j, &pu, pu[j]))
+                .collect()
         });
         assert!(replaced);
         assert!(raw.iter().all(|r| r.0.iter().all(|p| p.z == 0.0)));
         assert_eq!(raw[0].4, n - 1, "interior samples left off f = 0");
+        assert!((raw[0].5 - 0.25).abs() < 1e-6, "how far off, {}", raw[0].5);
         // ... and nothing changes when no alternative is clearly better.
         let (same, replaced) = run(rows(n, lifted), &|| rows(n, lifted), &|| {
             rows(n, |_, _| 1.8)
