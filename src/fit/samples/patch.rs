@@ -311,7 +311,9 @@ fn unballoon(
     raw: impl FnOnce() -> Vec<Row>,
 ) -> (Vec<Row>, bool) {
     let (s, t) = (pu.len() - 1, pv.len() - 1);
-    let area = |rows: &[Row]| {
+    // With `off`: the area away from the data too (a nearest-point query per cell, made only
+    // for patches that cover too much).
+    let area = |rows: &[Row], off: bool| {
         let at = |i: usize, j: usize| {
             if j == 0 {
                 coons.bot.p[i]
@@ -321,16 +323,19 @@ fn unballoon(
                 rows[j - 1].0[i]
             }
         };
-        grid_area(at, s, t, &away)
+        grid_area(at, s, t, |c| off && away(c))
     };
     let (coons_area, _) = grid_area(|i, j| coons.point(i, j, pu[i], pv[j]), s, t, |_| false);
     let limit = BALLOON * coons_area;
-    let (covered, off) = area(&rows);
-    if covered <= limit || off == 0.0 {
+    if area(&rows, false).0 <= limit {
+        return (rows, false);
+    }
+    let (_, off) = area(&rows, true);
+    if off == 0.0 {
         return (rows, false);
     }
     let better = |rows: &[Row]| {
-        let (a, o) = area(rows);
+        let (a, o) = area(rows, true);
         a <= limit && o <= 0.5 * off
     };
     let other = projected();
@@ -453,9 +458,9 @@ pub(super) fn build_patch<I: Implicit + ?Sized>(
         })
         .collect();
     // In an open fit a patch whose sample grid covers far more area than the Coons patch of
-    // its sides has section rows running round something beside it (on the cow seen from its
-    // side, rows round the far ear and horn, outside the data's rim) and gives way to the
-    // Coons rows projected onto f = 0 when those cover clearly less.
+    // its sides, partly off the data, has section rows running round something beside it (on
+    // the cow seen from its side, rows round the far ear and horn, outside the data's rim) and
+    // gives way to the Coons rows when those cover clearly less.
     let (rows, coons_rows) = match opt.near {
         Some(near) => unballoon(
             &coons,
