@@ -26,6 +26,19 @@ pub struct SupportReport {
     pub unsupported_fraction: f64,
 }
 
+/// Area |d1 x d2| / 2 (d1, d2 its diagonals) and centre of the grid cell with corners
+/// `p00`, `p10`, `p01`, `p11` (p_ij at grid position (i, j)).
+pub fn grid_cell(
+    p00: Point3<f64>,
+    p10: Point3<f64>,
+    p01: Point3<f64>,
+    p11: Point3<f64>,
+) -> (f64, Point3<f64>) {
+    let area = 0.5 * (p11 - p00).cross(&(p01 - p10)).norm();
+    let centre = Point3::from((p00.coords + p10.coords + p01.coords + p11.coords) / 4.0);
+    (area, centre)
+}
+
 /// Measures the support of the surfaces sampled by `grids` (each `points[i][j]`, i along u,
 /// j along v) by the points in `data`.
 pub fn surface_support(
@@ -56,12 +69,10 @@ pub fn surface_support_at<const N: usize>(
                     .saturating_sub(1)
                     .min(g[i + 1].len().saturating_sub(1))
                 {
-                    let (p00, p10, p01, p11) = (g[i][j], g[i + 1][j], g[i][j + 1], g[i + 1][j + 1]);
-                    let cell = 0.5 * (p11 - p00).cross(&(p01 - p10)).norm();
+                    let (cell, c) = grid_cell(g[i][j], g[i + 1][j], g[i][j + 1], g[i + 1][j + 1]);
                     if !cell.is_finite() {
                         continue;
                     }
-                    let c = Point3::from((p00.coords + p10.coords + p01.coords + p11.coords) / 4.0);
                     a[0] += cell;
                     let d = data.nearest(&c).1;
                     for (t, &th) in thresholds.iter().enumerate() {

@@ -174,8 +174,9 @@ pub struct PatchSamples {
     /// the implicit jumps across zero and a sample sits on the jump), from the root finders'
     /// last evaluations ([`EdgeSamples::residuals`]).
     pub max_residual: f64,
-    /// Whether the interior rows are the Coons rows projected onto f = 0 because the section
-    /// rows ballooned (open fits only; see `patch::unballoon`).
+    /// Whether the interior rows are the Coons rows (projected onto f = 0, or as they are and
+    /// counted in `unprojected`) because the section rows ballooned off the data (open fits
+    /// only; see `patch::unballoon`).
     pub coons_rows: bool,
     /// Whether the three deviations were measured (else they are 0; see
     /// [`SampleOptions::measure`]).
@@ -226,8 +227,8 @@ pub struct SampleReport {
     /// Interior samples left off the surface (see [`PatchSamples::unprojected`]).
     pub unprojected_samples: usize,
     /// Open fits: patches whose section rows covered more than three times the area of the
-    /// Coons patch of their sides (rows running round a part beside the patch) and were made
-    /// again from the Coons patch.
+    /// Coons patch of their sides, partly off the data (rows running round a part beside the
+    /// patch), and were made again from the Coons patch.
     pub coons_row_patches: usize,
     /// Largest |f| / |grad f| over all samples, and the patches with a sample farther than
     /// 1e-9 of the model size from f = 0 (implicit defects: f jumping across zero).

@@ -9,6 +9,7 @@ use super::{uniform_params, PatchSamples, PatchSide, SampleOptions};
 use crate::implicit::Implicit;
 use crate::polygonize::newton::{project, solve_on_line, NewtonOptions};
 use crate::polygonize::QuadNet;
+use crate::quality::support::grid_cell;
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 
@@ -266,8 +267,8 @@ impl Coons<'_> {
 pub(super) const BALLOON: f64 = 3.0;
 
 /// Area of a grid of points (`points(i, j)`, S x T cells) and of its cells whose centre is
-/// `away`: each cell counts |d1 x d2| / 2, d1 and d2 its diagonals (the measure of
-/// [`crate::quality::support`]).
+/// `away`, each cell measured as [`crate::quality::support`] measures it
+/// ([`grid_cell`]).
 fn grid_area(
     points: impl Fn(usize, usize) -> Point3<f64>,
     s: usize,
@@ -277,15 +278,13 @@ fn grid_area(
     let (mut area, mut off) = (0.0, 0.0);
     for i in 0..s {
         for j in 0..t {
-            let (p00, p10, p01, p11) = (
+            let (a, c) = grid_cell(
                 points(i, j),
                 points(i + 1, j),
                 points(i, j + 1),
                 points(i + 1, j + 1),
             );
-            let a = 0.5 * (p11 - p00).cross(&(p01 - p10)).norm();
             area += a;
-            let c = Point3::from((p00.coords + p10.coords + p01.coords + p11.coords) / 4.0);
             if away(&c) {
                 off += a;
             }
