@@ -150,6 +150,35 @@ impl SharpFunction {
             .map(|s| s.poly.value_and_gradient(x))
     }
 
+    /// Share of the points whose normal agrees with the function (the dot product with the
+    /// unit gradient above 0.3, as [`crate::implicit::local::assess`] counts it) where a point
+    /// agrees with F when it agrees with the gradient of some side whose value there is within
+    /// `tie` of F: on the crease both sides are F, and a point sampled on the crease with the
+    /// normal of either face is on the surface as its normal says (its face's side may lose the
+    /// max or min to the other by a rounding error, whose gradient is 90 degrees off).
+    pub fn normal_agreement(
+        &self,
+        points: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        tie: f64,
+    ) -> f64 {
+        if points.is_empty() {
+            return 1.0;
+        }
+        let agree = points
+            .iter()
+            .zip(normals)
+            .filter(|(x, n)| {
+                let f = self.value(x);
+                self.sides.iter().any(|s| {
+                    let (v, g) = s.poly.value_and_gradient(x);
+                    (v - f).abs() <= tie && g.dot(n) > 0.3 * g.norm() * n.norm()
+                })
+            })
+            .count();
+        agree as f64 / points.len() as f64
+    }
+
     /// Fits a sharp function to a domain's points: `labels[i]` is the region of `points[i]`
     /// ([`NO_REGION`] for none), `normals` their one-sided unit normals, `scale` the domain's
     /// length scale, `min_normal_cos` the height-function test of [`Frame::from_normals`]. A
@@ -323,6 +352,31 @@ mod tests {
             .unwrap();
         assert!((v - 0.2).abs() < 1e-9 && (g - Vector3::y()).norm() < 1e-9);
         assert!(f.side_value_and_gradient(7, &Point3::origin()).is_none());
+    }
+
+    #[test]
+    fn points_on_the_edge_agree_with_the_side_of_their_own_face() {
+        // Samples on the edge itself (x = y = 0), half of them with the normal of face y = 0:
+        // at the tie F takes face x = 0's gradient, 90 degrees off those normals.
+        let (mut p, mut n, mut l) = edge(true, 1.0, 8);
+        for j in 0..8 {
+            let z = j as f64 / 8.0 - 0.5;
+            p.extend([Point3::new(0.0, 0.0, z), Point3::new(0.0, 0.0, z)]);
+            n.extend([Vector3::x(), Vector3::y()]);
+            l.extend([0, 1]);
+        }
+        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3, 1e-9).unwrap();
+        let plain = crate::implicit::local::assess(
+            crate::implicit::local::LocalFunction::Sharp(f.clone()),
+            &p,
+            &n,
+        );
+        assert!(plain.normal_agreement < 1.0, "{}", plain.normal_agreement);
+        assert_eq!(f.normal_agreement(&p, &n, 1e-6), 1.0);
+        // A normal that agrees with no side near the point still disagrees.
+        let odd = [Point3::new(0.0, 0.0, 0.0), Point3::new(0.0, -0.5, 0.0)];
+        let m = [-Vector3::y(), Vector3::y()];
+        assert_eq!(f.normal_agreement(&odd, &m, 1e-6), 0.0);
     }
 
     #[test]

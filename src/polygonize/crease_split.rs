@@ -29,7 +29,9 @@
 //! which is fanned from the corner point when that was found. Every new triangle keeps the
 //! orientation of the one it replaces; a triangle one of whose pieces would turn over (a crease
 //! point found beside the edge where the surface folds, a corner point off its middle) gives up
-//! its splits, round after round, so the splitting never folds the mesh.
+//! its splits, round after round, so the splitting never folds the mesh. Where that leaves
+//! an edge across the crease between two crease points, it is flipped onto the crease
+//! ([`super::crease_flip`]).
 
 use crate::mesh::Mesh;
 use nalgebra::{Matrix2, Matrix3, Point3, Vector2, Vector3};
@@ -77,6 +79,9 @@ pub struct CreaseSplitReport {
     pub corner_triangles: usize,
     /// Of those, given their corner point.
     pub corners: usize,
+    /// Edges still crossing a crease between two crease points, flipped onto it
+    /// ([`super::crease_flip`]).
+    pub flipped_edges: usize,
 }
 
 /// The point where the surfaces of `regions` meet nearest to `start` (two regions: a crease
@@ -273,6 +278,7 @@ pub fn split_at_creases(
     if let Some(n) = &mut mesh.normals {
         n.resize(mesh.positions.len(), Vector3::zeros());
     }
+    report.flipped_edges = super::crease_flip::flip_across_creases(mesh, &label, first_new);
     report
 }
 

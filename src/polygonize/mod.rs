@@ -11,6 +11,7 @@
 
 pub mod components;
 pub mod crease_collapse;
+pub mod crease_flip;
 pub mod crease_labels;
 pub mod crease_nodes;
 pub mod crease_split;

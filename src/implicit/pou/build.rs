@@ -34,6 +34,14 @@ const LEAF_FACTOR: f64 = 1.5;
 /// beside the creases from 4.1 to 1.3 degrees, p95).
 const SHARP_FACTOR: f64 = 2.0;
 
+/// A crease cell too small to split keeps its sharp function within this many times the
+/// tolerance, rather than a smooth fit or an RBF through its points, which rounds the crease or
+/// overshoots it between the points: where a face's side is itself not one quadratic (a fillet
+/// running into a plane beside the crease) the sharp function misses by a few tolerances at
+/// every size, and the RBF that took such cells bulged 0.1 mm past make_parts' block's bottom
+/// edge at the end of a vertical fillet (crease distance 1.8e-3 of the diagonal).
+const SHARP_LEAF_FACTOR: f64 = 4.0;
+
 /// The split rule of the octree: fits a cell and decides whether it is a leaf.
 pub(super) struct Builder<'a> {
     pub(super) pts: &'a [Point3<f64>],
@@ -274,8 +282,9 @@ impl Builder<'_> {
 
     /// A cell whose support holds points of two or three smooth regions (feature-aware fits
     /// only): a sharp function ([`crate::implicit::sharp`]) when it is within [`SHARP_FACTOR`]
-    /// times the tolerance, a split when more than three regions meet in it; `None` leaves the
-    /// cell to the smooth fits.
+    /// times the tolerance, a split when more than three regions meet in it. `Err` leaves the
+    /// cell to the smooth fits, with the sharp function that was fitted but missed the
+    /// tolerance (for [`SHARP_LEAF_FACTOR`]), if any.
     #[allow(clippy::too_many_arguments)]
     fn sharp_cell(
         &self,
@@ -286,21 +295,36 @@ impl Builder<'_> {
         p: &[Point3<f64>],
         n: &[Vector3<f64>],
         h: f64,
-    ) -> Option<Decision<Cell>> {
-        let labels = self.labels?;
+    ) -> Result<Decision<Cell>, Option<Box<LocalFit>>> {
+        let Some(labels) = self.labels else {
+            return Err(None);
+        };
         let l: Vec<u32> = idx.iter().map(|&i| labels[i]).collect();
         let sides = sharp::region_groups(&l, sharp::MIN_SIDE).len();
         if sides < 2 {
-            return None;
+            return Err(None);
         }
         if sides > sharp::MAX_SIDES {
-            return ctx.can_split.then_some(Decision::Split);
+            return if ctx.can_split {
+                Ok(Decision::Split)
+            } else {
+                Err(None)
+            };
         }
-        let f = SharpFunction::fit(p, n, &l, h, self.opts.min_normal_cos, 0.5 * self.tol)?;
-        let fit = local::assess(LocalFunction::Sharp(f), p, n);
-        let accept = SHARP_FACTOR * self.tol;
-        (fit.max_residual <= accept && fit.normal_agreement >= 1.0)
-            .then(|| self.leaf(*c, h0, p.len(), fit))
+        let Some(f) = SharpFunction::fit(p, n, &l, h, self.opts.min_normal_cos, 0.5 * self.tol)
+        else {
+            return Err(None);
+        };
+        let agreement = f.normal_agreement(p, n, self.tol);
+        let fit = LocalFit {
+            normal_agreement: agreement,
+            ..local::assess(LocalFunction::Sharp(f), p, n)
+        };
+        if fit.max_residual <= SHARP_FACTOR * self.tol && fit.normal_agreement >= 1.0 {
+            Ok(self.leaf(*c, h0, p.len(), fit))
+        } else {
+            Err(Some(Box::new(fit)))
+        }
     }
 
     pub(super) fn decide(&self, ctx: &CellContext) -> Decision<Cell> {
@@ -388,9 +412,11 @@ impl Builder<'_> {
             scale: h,
             rbf_eps: 0.1 * h,
         };
+        let mut loose_sharp = None;
         if !empty {
-            if let Some(d) = self.sharp_cell(ctx, &c, h0, &idx, &p, &n, h) {
-                return d;
+            match self.sharp_cell(ctx, &c, h0, &idx, &p, &n, h) {
+                Ok(d) => return d,
+                Err(f) => loose_sharp = f,
             }
         }
         let mut best: Option<LocalFit> = None;
@@ -441,7 +467,15 @@ impl Builder<'_> {
         {
             return Decision::Split;
         }
-        // Too small to split. A polynomial within a few times the tolerance is kept: what it
+        // Too small to split. A crease cell keeps its sharp function when that is within
+        // SHARP_LEAF_FACTOR times the tolerance: the smooth fits below would round the crease,
+        // and the interpolating RBF overshoots it between the points.
+        if let Some(f) = loose_sharp
+            .filter(|f| f.max_residual <= SHARP_LEAF_FACTOR * self.tol && f.normal_agreement >= 1.0)
+        {
+            return self.leaf(c, h0, p.len(), *f);
+        }
+        // A polynomial within a few times the tolerance is kept: what it
         // misses at this size is noise, which a least-squares fit smooths and an interpolating
         // RBF would follow with wiggles. Otherwise (folds, sharp features) an RBF through the
         // (sub-sampled) support.
