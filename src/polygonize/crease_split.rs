@@ -31,7 +31,8 @@
 //! point found beside the edge where the surface folds, a corner point off its middle) gives up
 //! its splits, round after round, so the splitting never folds the mesh. Where that leaves
 //! an edge across the crease between two crease points, it is flipped onto the crease
-//! ([`super::crease_flip`]).
+//! ([`super::crease_flip`]); a vertex beside a crease whose edges across it stayed whole moves
+//! onto it ([`super::crease_snap`]).
 
 use crate::mesh::Mesh;
 use nalgebra::{Matrix2, Matrix3, Point3, Vector2, Vector3};
@@ -82,6 +83,9 @@ pub struct CreaseSplitReport {
     /// Edges still crossing a crease between two crease points, flipped onto it
     /// ([`super::crease_flip`]).
     pub flipped_edges: usize,
+    /// Vertices beside a crease whose edges across it stayed whole, moved onto it
+    /// ([`super::crease_snap`]).
+    pub snapped_vertices: usize,
 }
 
 /// The point where the surfaces of `regions` meet nearest to `start` (two regions: a crease
@@ -279,6 +283,8 @@ pub fn split_at_creases(
         n.resize(mesh.positions.len(), Vector3::zeros());
     }
     report.flipped_edges = super::crease_flip::flip_across_creases(mesh, &label, first_new);
+    report.snapped_vertices =
+        super::crease_snap::snap_to_creases(mesh, field, &label, first_new, opts);
     report
 }
 
