@@ -113,6 +113,13 @@ pub fn assess(f: LocalFunction, points: &[Point3<f64>], normals: &[Vector3<f64>]
     assess_values(f, &values, normals)
 }
 
+/// Whether a point's normal `n` agrees with the gradient `g` of a function there (their angle
+/// under about 73 degrees: the dot product above 0.3 of their lengths' product).
+#[inline]
+pub fn agrees(g: &Vector3<f64>, n: &Vector3<f64>) -> bool {
+    g.dot(n) > 0.3 * g.norm() * n.norm()
+}
+
 /// [`assess`] from f and grad f at the points, already known.
 fn assess_values(
     f: LocalFunction,
@@ -125,7 +132,7 @@ fn assess_values(
     for (&(v, g), n) in values.iter().zip(normals) {
         max_residual = max_residual.max(v.abs());
         sq += v * v;
-        if g.dot(n) > 0.3 * g.norm() * n.norm() {
+        if agrees(&g, n) {
             agree += 1;
         }
         if !v.is_finite() {

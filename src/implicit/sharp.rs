@@ -150,8 +150,8 @@ impl SharpFunction {
             .map(|s| s.poly.value_and_gradient(x))
     }
 
-    /// Share of the points whose normal agrees with the function (the dot product with the
-    /// unit gradient above 0.3, as [`crate::implicit::local::assess`] counts it) where a point
+    /// Share of the points whose normal agrees with the function
+    /// ([`crate::implicit::local::agrees`], as [`crate::implicit::local::assess`] counts it), where a point
     /// agrees with F when it agrees with the gradient of some side whose value there is within
     /// `tie` of F: on the crease both sides are F, and a point sampled on the crease with the
     /// normal of either face is on the surface as its normal says (its face's side may lose the
@@ -172,7 +172,7 @@ impl SharpFunction {
                 let f = self.value(x);
                 self.sides.iter().any(|s| {
                     let (v, g) = s.poly.value_and_gradient(x);
-                    (v - f).abs() <= tie && g.dot(n) > 0.3 * g.norm() * n.norm()
+                    (v - f).abs() <= tie && super::local::agrees(&g, n)
                 })
             })
             .count();

@@ -5,7 +5,8 @@
 //! given up (its crease point folded a triangle, or lay off the edge): there an edge (a, b)
 //! from one face to the other still crosses the crease, and the two triangles on it,
 //! (a, b, c) and (b, a, d), cut the edge off between the crease points c and d opposite it
-//! (make_parts' block, the rim of its through hole: 0.08 mm, 1e-3 of the diagonal).
+//! (make_parts' block.stl: 19 such edges; flipped, the crease distance's 95th percentile goes
+//! from 1.68e-4 to 1.58e-4 of the diagonal, lplate.stl's from 1.06e-5 to 7.8e-6).
 //!
 //! **Flip.** Such an edge, a and b original vertices of different regions and c and d both
 //! crease points, is replaced by (c, d): the triangles (a, d, c) and (d, b, c), in the
@@ -15,8 +16,9 @@
 //! Each triangle takes part in one flip at most; the faces are visited in order, so the
 //! result does not depend on the thread count.
 
+use super::crease_split::tri_normal;
 use crate::mesh::Mesh;
-use nalgebra::{Point3, Vector3};
+use nalgebra::Point3;
 use std::collections::HashMap;
 
 /// Flips the edges that cross a crease between two crease points (module doc); returns how
@@ -80,14 +82,10 @@ pub fn flip_across_creases(mesh: &mut Mesh, label: &[u32], first_new: usize) -> 
 /// Whether the triangles `new` are not degenerate and turn with each of `old`: every new
 /// normal within 90 degrees of every old one.
 fn keeps_orientation(pos: &[Point3<f64>], old: &[[u32; 3]; 2], new: &[[u32; 3]; 2]) -> bool {
-    let normal = |t: &[u32; 3]| -> Vector3<f64> {
-        let p = t.map(|v| pos[v as usize]);
-        (p[1] - p[0]).cross(&(p[2] - p[0]))
-    };
-    let old_n = old.map(|t| normal(&t));
+    let old_n = old.map(|t| tri_normal(pos, &t));
     let scale = old_n[0].norm().max(old_n[1].norm());
     new.iter().all(|t| {
-        let n = normal(t);
+        let n = tri_normal(pos, t);
         n.norm() > 1e-6 * scale && old_n.iter().all(|o| n.dot(o) > 0.0)
     })
 }

@@ -15,11 +15,10 @@
 //! degrees of what it was, and its area). A vertex moves once; the edges are visited in the
 //! order of the faces, so the result does not depend on the thread count.
 
-use super::crease_split::{meet_point, CreaseSplitOptions, SideField};
+use super::crease_split::{crossing_edges, meet_point, tri_normal, CreaseSplitOptions, SideField};
 use crate::mesh::Mesh;
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
-use std::collections::HashSet;
 
 /// Largest move, as a fraction of the crossing edge's length (block.stl: 0.35 moves 23 vertices,
 /// 0.5 moves 27 and also fixes a spot 7e-4 of the diagonal off at the rim of its hole; a move
@@ -35,20 +34,7 @@ pub fn snap_to_creases(
     first_new: usize,
     opts: &CreaseSplitOptions,
 ) -> usize {
-    let original = |v: u32| (v as usize) < first_new;
-    let mut seen: HashSet<(u32, u32)> = HashSet::new();
-    let mut crossing: Vec<(u32, u32)> = Vec::new();
-    for f in &mesh.faces {
-        for k in 0..3 {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            if original(a) && original(b) && label[a as usize] != label[b as usize] {
-                let key = (a.min(b), a.max(b));
-                if seen.insert(key) {
-                    crossing.push(key);
-                }
-            }
-        }
-    }
+    let crossing = crossing_edges(&mesh.faces, label, first_new);
     let pos = &mesh.positions;
     // Per edge: the end to move and where, if within reach.
     let moves: Vec<Option<(u32, Point3<f64>)>> = crossing
@@ -81,22 +67,21 @@ pub fn snap_to_creases(
         if moved[v as usize] {
             continue;
         }
-        let normal = |f: &[u32; 3], at: Option<Point3<f64>>| -> Vector3<f64> {
-            let p = f.map(|u| match at {
-                Some(c) if u == v => c,
-                _ => mesh.positions[u as usize],
-            });
-            (p[1] - p[0]).cross(&(p[2] - p[0]))
-        };
-        let keeps = ring[v as usize].iter().all(|&i| {
-            let f = &mesh.faces[i as usize];
-            let (before, after) = (normal(f, None), normal(f, Some(c)));
-            after.dot(&before) > 0.0 && after.norm() > 1e-3 * before.norm()
+        // Tried in place, taken back when a triangle around it turns over or collapses.
+        let before: Vec<Vector3<f64>> = ring[v as usize]
+            .iter()
+            .map(|&i| tri_normal(&mesh.positions, &mesh.faces[i as usize]))
+            .collect();
+        let old = std::mem::replace(&mut mesh.positions[v as usize], c);
+        let keeps = ring[v as usize].iter().zip(&before).all(|(&i, b)| {
+            let after = tri_normal(&mesh.positions, &mesh.faces[i as usize]);
+            after.dot(b) > 0.0 && after.norm() > 1e-3 * b.norm()
         });
         if keeps {
-            mesh.positions[v as usize] = c;
             moved[v as usize] = true;
             count += 1;
+        } else {
+            mesh.positions[v as usize] = old;
         }
     }
     count

@@ -148,20 +148,7 @@ pub fn split_at_creases(
 ) -> CreaseSplitReport {
     let mut report = CreaseSplitReport::default();
     let label: Vec<u32> = mesh.positions.par_iter().map(|p| field.region(p)).collect();
-    // Crossing edges, each once, in the order of the faces.
-    let mut crossing: Vec<(u32, u32)> = Vec::new();
-    let mut seen: HashSet<(u32, u32)> = HashSet::new();
-    for f in &mesh.faces {
-        for k in 0..3 {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            if label[a as usize] != label[b as usize] {
-                let key = edge_key(a, b);
-                if seen.insert(key) {
-                    crossing.push(key);
-                }
-            }
-        }
-    }
+    let crossing = crossing_edges(&mesh.faces, &label, label.len());
     report.crossing_edges = crossing.len();
     let pos = &mesh.positions;
     let found: Vec<Option<Point3<f64>>> = crossing
@@ -296,8 +283,32 @@ fn edge_key(a: u32, b: u32) -> (u32, u32) {
     (a.min(b), a.max(b))
 }
 
+/// The edges of `faces` between vertices before `first_new` whose ends lie on different regions
+/// (`label`), each once as its [`edge_key`], in the order of the faces.
+pub(super) fn crossing_edges(
+    faces: &[[u32; 3]],
+    label: &[u32],
+    first_new: usize,
+) -> Vec<(u32, u32)> {
+    let labelled = |v: u32| (v as usize) < first_new;
+    let mut crossing: Vec<(u32, u32)> = Vec::new();
+    let mut seen: HashSet<(u32, u32)> = HashSet::new();
+    for f in faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            if labelled(a) && labelled(b) && label[a as usize] != label[b as usize] {
+                let key = edge_key(a, b);
+                if seen.insert(key) {
+                    crossing.push(key);
+                }
+            }
+        }
+    }
+    crossing
+}
+
 /// The (unnormalized) normal of triangle `t`.
-fn tri_normal(pos: &[Point3<f64>], t: &[u32; 3]) -> Vector3<f64> {
+pub(super) fn tri_normal(pos: &[Point3<f64>], t: &[u32; 3]) -> Vector3<f64> {
     let p = t.map(|v| pos[v as usize]);
     (p[1] - p[0]).cross(&(p[2] - p[0]))
 }

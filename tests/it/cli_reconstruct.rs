@@ -6,7 +6,7 @@ use std::path::Path;
 use std::process::Command;
 
 /// `reconstruct --sharp` keeps the block's creases, from its mesh and from its noisy cloud: the
-/// mesh's triangles split on the creases (1.6e-4 and 4.1e-4 of the diagonal at the 95th
+/// mesh's triangles split on the creases (1.6e-4 and 3.9e-4 of the diagonal at the 95th
 /// percentile; without `--sharp` 1.2e-3 and 1.6e-3), the band beside them and the faces turned
 /// right (0.9 and 2.7 degrees; without: band 14 degrees at the 95th percentile), nothing folded.
 #[test]
