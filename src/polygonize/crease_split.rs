@@ -18,7 +18,7 @@
 //! which converges to the point of the crease line f_A = f_B = 0 nearest to the start. It is
 //! kept when it converged, the two gradients are not near parallel (the sides differ there: a
 //! sharp cell covers the point) and it lies between a and b (its projection on the edge within
-//! the edge, its distance from it under half the edge): otherwise the edge stays whole. The
+//! the edge, the angle a-c-b at least [`MIN_APEX_DEG`]): otherwise the edge stays whole. The
 //! corner of a triangle with three regions is the same iteration with three functions (a 3 x 3
 //! system).
 //!
@@ -140,6 +140,30 @@ pub fn meet_point(
     None
 }
 
+/// Smallest angle a-c-b, in degrees, at which a crease point c found for the edge (a, b) is
+/// kept (module doc). Marching cubes puts both ends of an edge across a crease on the two faces,
+/// so the edge cuts off the crease and c lies off it: at a right-angled edge cut symmetrically
+/// the angle is 90 degrees (c half the edge off), at the 70-degree edge of a dovetail 70; a
+/// crease point much further off (a smaller angle) is a different part of the crease line.
+const MIN_APEX_DEG: f64 = 45.0;
+
+/// How far past its edges a triangle with three regions may have the corner it cuts off, in
+/// barycentric coordinates of the corner's projection. Marching cubes cuts a corner with a
+/// triangle whose vertices lie unevenly far from it, so that the corner's projection along the
+/// triangle's normal can fall just outside (the wedge's box corners: down to -0.06); the fold guard
+/// then still checks that the fan around the corner does not turn over.
+const CORNER_MARGIN: f64 = 0.25;
+
+/// cos of the angle a-c-b (-1 when c lies on the segment).
+fn apex_cosine(a: Point3<f64>, b: Point3<f64>, c: Point3<f64>) -> f64 {
+    let (u, v) = (a - c, b - c);
+    let n = u.norm() * v.norm();
+    if n <= 0.0 {
+        return -1.0;
+    }
+    u.dot(&v) / n
+}
+
 /// Splits the edges and triangles of `mesh` that cross creases (module doc).
 pub fn split_at_creases(
     mesh: &mut Mesh,
@@ -164,8 +188,8 @@ pub fn split_at_creases(
             let regions = [label[a as usize], label[b as usize]];
             let c = meet_point(field, &regions, mid, len, opts)?;
             let t = (c - pa).dot(&e) / (len * len);
-            let off = ((c - pa) - e * t).norm();
-            (t > 0.0 && t < 1.0 && off <= 0.5 * len).then_some(c)
+            (t > 0.0 && t < 1.0 && apex_cosine(pa, pb, c) <= MIN_APEX_DEG.to_radians().cos())
+                .then_some(c)
         })
         .collect();
     // Every candidate becomes a vertex now; those a fold guard rejects are dropped at the end.
@@ -197,11 +221,12 @@ pub fn split_at_creases(
                 .max((p[0] - p[2]).norm());
             let regions = f.map(|v| label[v as usize]);
             let c = meet_point(field, &regions, centre, scale, opts)?;
-            // Inside the triangle (barycentric coordinates of its projection all positive).
+            // Over the triangle: the barycentric coordinates of its projection over
+            // -CORNER_MARGIN.
             let n = (p[1] - p[0]).cross(&(p[2] - p[0]));
             let inside = (0..3).all(|k| {
                 let (u, v) = (p[k], p[(k + 1) % 3]);
-                (v - u).cross(&(c - u)).dot(&n) > 0.0
+                (v - u).cross(&(c - u)).dot(&n) > -CORNER_MARGIN * n.norm_squared()
             });
             inside.then_some(c)
         })
@@ -434,6 +459,84 @@ mod tests {
         }
         // Outward orientation kept: positive volume.
         assert!(mesh.signed_volume() > 7.0, "{}", mesh.signed_volume());
+    }
+
+    #[test]
+    fn a_corner_just_past_its_triangle_comes_back() {
+        // A triangle on three faces of the cube whose corner (1, 1, 1) projects just outside
+        // it (barycentric -0.04 across one edge), as marching cubes cuts a corner unevenly.
+        let mut mesh = Mesh {
+            positions: vec![
+                Point3::new(1.0, 0.58, 0.73),
+                Point3::new(0.68, 1.0, 0.8),
+                Point3::new(0.74, 0.52, 1.0),
+            ],
+            faces: vec![[0, 1, 2]],
+            ..Default::default()
+        };
+        let r = split_at_creases(&mut mesh, &Cube, &CreaseSplitOptions::default());
+        assert_eq!((r.split_edges, r.corners), (3, 1), "{r:?}");
+        let corner = Point3::new(1.0, 1.0, 1.0);
+        assert!(
+            mesh.positions.iter().any(|p| (p - corner).norm() < 1e-6),
+            "{:?}",
+            mesh.positions
+        );
+        assert_eq!(mesh.faces.len(), 6);
+    }
+
+    #[test]
+    fn an_acute_edge_cut_off_by_an_edge_is_split() {
+        // The wedge 0 <= atan2(y, x) <= 70 degrees along the z axis: face A the half-plane
+        // y = 0, face B at 70 degrees. The edge (a, b) cuts the crease off with the crease
+        // point 0.71 of its length away (the angle a-c-b is 70 degrees).
+        struct Wedge;
+        const OPEN: f64 = 70.0;
+        impl SideField for Wedge {
+            fn region(&self, x: &Point3<f64>) -> u32 {
+                u32::from(x.y.atan2(x.x).to_degrees() > 0.5 * OPEN)
+            }
+            fn side(&self, region: u32, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+                let n = match region {
+                    0 => Vector3::new(0.0, -1.0, 0.0),
+                    _ => {
+                        let t = OPEN.to_radians();
+                        Vector3::new(-t.sin(), t.cos(), 0.0)
+                    }
+                };
+                (n.dot(&x.coords), n)
+            }
+        }
+        let t = OPEN.to_radians();
+        let b = |z: f64| Point3::new(0.4 * t.cos(), 0.4 * t.sin(), z);
+        let mut mesh = Mesh {
+            positions: vec![
+                Point3::new(0.4, 0.0, 0.0),
+                b(0.0),
+                Point3::new(0.4, 0.0, 1.0),
+                b(-1.0),
+            ],
+            // Both triangles cross the crease; (0, 1) is the edge that cuts it off.
+            faces: vec![[1, 0, 2], [0, 1, 3]],
+            ..Default::default()
+        };
+        let r = split_at_creases(&mut mesh, &Wedge, &CreaseSplitOptions::default());
+        assert!(r.split_edges >= 1, "{r:?}");
+        assert!(
+            mesh.positions.iter().any(|p| p.coords.norm() < 1e-6),
+            "no vertex on the crease at the origin: {:?}",
+            mesh.positions
+        );
+        // Every triangle now lies in one face: no triangle cuts the crease any more.
+        for f in &mesh.faces {
+            let regions: HashSet<u32> = f
+                .iter()
+                .map(|&v| mesh.positions[v as usize])
+                .filter(|p| p.x.hypot(p.y) > 1e-6)
+                .map(|p| Wedge.region(&p))
+                .collect();
+            assert!(regions.len() <= 1, "{f:?} {:?}", mesh.positions);
+        }
     }
 
     #[test]
