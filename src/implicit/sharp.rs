@@ -263,7 +263,7 @@ fn fit_side(
     min_normal_cos: f64,
     flat: f64,
 ) -> Option<HeightPoly> {
-    let frame = Frame::from_normals(p, n, scale, min_normal_cos)?;
+    let frame = side_frame(p, n, scale, min_normal_cos)?;
     let plane = HeightPoly::fit(p, frame, Degree::Linear).ok()?;
     let is_flat = p.iter().all(|x| plane.value(x).abs() <= flat);
     let degree = |k: usize| {
@@ -292,6 +292,37 @@ fn fit_side(
         .ok()
         .or(Some(first))
 }
+
+/// The height frame of one side's points: along their mean normal, when every normal is within
+/// `min_normal_cos` of it. Failing that, the frame of the points whose normals are (a normal
+/// estimated across the crease, or a point of the other face given this region's label: one in
+/// twenty beside the crease of a noisy cloud), as long as they keep at least [`MIN_SIDE`] points
+/// and [`SIDE_KEEP`] of the side; those points still count in the cell's assessment.
+fn side_frame(
+    p: &[Point3<f64>],
+    n: &[Vector3<f64>],
+    scale: f64,
+    min_normal_cos: f64,
+) -> Option<Frame> {
+    if let Some(f) = Frame::from_normals(p, n, scale, min_normal_cos) {
+        return Some(f);
+    }
+    let mean: Vector3<f64> = n.iter().map(|m| m.try_normalize(1e-12).unwrap_or(*m)).sum();
+    let mean = mean.try_normalize(1e-12)?;
+    let (kp, kn): (Vec<Point3<f64>>, Vec<Vector3<f64>>) = p
+        .iter()
+        .zip(n)
+        .filter(|(_, m)| m.dot(&mean) >= min_normal_cos * m.norm())
+        .map(|(x, m)| (*x, *m))
+        .unzip();
+    if kp.len() < MIN_SIDE || (kp.len() as f64) < SIDE_KEEP * p.len() as f64 {
+        return None;
+    }
+    Frame::from_normals(&kp, &kn, scale, min_normal_cos)
+}
+
+/// The share of a side's points whose normals must agree for [`side_frame`] to drop the rest.
+const SIDE_KEEP: f64 = 0.8;
 
 /// Median of the values (0 for none).
 fn median(values: impl Iterator<Item = f64>) -> f64 {
@@ -352,6 +383,28 @@ mod tests {
             .unwrap();
         assert!((v - 0.2).abs() < 1e-9 && (g - Vector3::y()).norm() < 1e-9);
         assert!(f.side_value_and_gradient(7, &Point3::origin()).is_none());
+    }
+
+    #[test]
+    fn a_side_keeps_its_frame_when_a_few_normals_cross_the_edge() {
+        // Two of face x = 0's 64 points carry face y = 0's normal (estimated across the edge):
+        // the side is fitted from the others, and F is still the max of the two faces.
+        let (p, mut n, l) = edge(true, 1.0, 8);
+        for k in [0, 2] {
+            assert_eq!(l[k], 0);
+            n[k] = Vector3::y();
+        }
+        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.5, 1e-9).expect("a sharp function");
+        assert_eq!(f.combination().0, Combine::Max);
+        for q in &p {
+            assert!(f.value(q).abs() < 1e-9, "{q}: {}", f.value(q));
+        }
+        // A quarter of the side's normals across the edge is no side (no frame).
+        let (p, mut n, l) = edge(true, 1.0, 8);
+        for k in (0..p.len()).filter(|&k| l[k] == 0).step_by(4) {
+            n[k] = Vector3::y();
+        }
+        assert!(SharpFunction::fit(&p, &n, &l, 1.0, 0.5, 1e-9).is_none());
     }
 
     #[test]
@@ -491,6 +544,6 @@ mod tests {
                 }
             }
         }
-        assert!(SharpFunction::fit(&p, &n, &l, 1.0, 0.3, 1e-9).is_none());
+        assert!(SharpFunction::fit(&p, &n, &l, 1.0, 0.5, 1e-9).is_none());
     }
 }
