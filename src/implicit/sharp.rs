@@ -294,10 +294,12 @@ fn fit_side(
 }
 
 /// The height frame of one side's points: along their mean normal, when every normal is within
-/// `min_normal_cos` of it. Failing that, the frame of the points whose normals are (a normal
-/// estimated across the crease, or a point of the other face given this region's label: one in
-/// twenty beside the crease of a noisy cloud), as long as they keep at least [`MIN_SIDE`] points
-/// and [`SIDE_KEEP`] of the side; those points still count in the cell's assessment.
+/// `min_normal_cos` of it. Failing that, the frame of the points whose normals are within it of
+/// the mean of the unit normals, the others left out (a normal estimated across the crease, or
+/// a point of the other face given this region's label: one in twenty beside the crease of a
+/// noisy cloud), as long as at least [`MIN_SIDE`] points and [`SIDE_KEEP`] of the side remain.
+/// The left-out points are still fitted (the residual cut of [`fit_side`] drops the other
+/// face's) and still count in the cell's assessment.
 fn side_frame(
     p: &[Point3<f64>],
     n: &[Vector3<f64>],
