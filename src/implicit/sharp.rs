@@ -546,6 +546,6 @@ mod tests {
                 }
             }
         }
-        assert!(SharpFunction::fit(&p, &n, &l, 1.0, 0.5, 1e-9).is_none());
+        assert!(SharpFunction::fit(&p, &n, &l, 1.0, 0.3, 1e-9).is_none());
     }
 }
