@@ -121,7 +121,7 @@ pub fn agrees(g: &Vector3<f64>, n: &Vector3<f64>) -> bool {
 }
 
 /// [`assess`] from f and grad f at the points, already known.
-fn assess_values(
+pub fn assess_values(
     f: LocalFunction,
     values: &[(f64, Vector3<f64>)],
     normals: &[Vector3<f64>],

@@ -162,21 +162,46 @@ impl SharpFunction {
         normals: &[Vector3<f64>],
         tie: f64,
     ) -> f64 {
-        if points.is_empty() {
-            return 1.0;
-        }
-        let agree = points
+        self.evaluate(points, normals, tie).1
+    }
+
+    /// F and grad F at every point (as [`Self::value_and_gradient`] gives them) and the share
+    /// of the points whose normal agrees ([`Self::normal_agreement`]), each side evaluated once
+    /// per point: what a crease cell of the octree is assessed by.
+    pub fn evaluate(
+        &self,
+        points: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        tie: f64,
+    ) -> (Vec<(f64, Vector3<f64>)>, f64) {
+        let k = self.sides.len();
+        let mut agree = 0usize;
+        let values = points
             .iter()
             .zip(normals)
-            .filter(|(x, n)| {
-                let f = self.value(x);
-                self.sides.iter().any(|s| {
-                    let (v, g) = s.poly.value_and_gradient(x);
-                    (v - f).abs() <= tie && super::local::agrees(&g, n)
-                })
+            .map(|(x, n)| {
+                let mut v = [0.0; MAX_SIDES];
+                let mut vg = [(0.0, Vector3::zeros()); MAX_SIDES];
+                for ((vi, gi), s) in v.iter_mut().zip(vg.iter_mut()).zip(&self.sides) {
+                    *vi = s.poly.value(x);
+                    *gi = s.poly.value_and_gradient(x);
+                }
+                let (f, active) = self.pick(&v[..k]);
+                if vg[..k]
+                    .iter()
+                    .any(|(vs, g)| (vs - f).abs() <= tie && super::local::agrees(g, n))
+                {
+                    agree += 1;
+                }
+                vg[active]
             })
-            .count();
-        agree as f64 / points.len() as f64
+            .collect();
+        let share = if points.is_empty() {
+            1.0
+        } else {
+            agree as f64 / points.len() as f64
+        };
+        (values, share)
     }
 
     /// Fits a sharp function to a domain's points: `labels[i]` is the region of `points[i]`

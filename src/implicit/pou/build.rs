@@ -321,10 +321,10 @@ impl Builder<'_> {
         else {
             return Err(None);
         };
-        let agreement = f.normal_agreement(p, n, self.tol);
+        let (values, agreement) = f.evaluate(p, n, self.tol);
         let fit = LocalFit {
             normal_agreement: agreement,
-            ..local::assess(LocalFunction::Sharp(f), p, n)
+            ..local::assess_values(LocalFunction::Sharp(f), &values, n)
         };
         if fit.max_residual <= SHARP_FACTOR * self.tol && fit.normal_agreement >= 1.0 {
             Ok(self.leaf(*c, h0, p.len(), fit))
