@@ -54,37 +54,48 @@ pub fn snap_to_creases(
                 .map(|(_, v, c)| (v, c))
         })
         .collect();
-    // Faces around each vertex, for the fold test.
-    let mut ring: Vec<Vec<u32>> = vec![Vec::new(); mesh.positions.len()];
-    for (i, f) in mesh.faces.iter().enumerate() {
-        for &v in f {
-            ring[v as usize].push(i as u32);
-        }
-    }
+    let ring = face_rings(mesh);
     let mut moved = vec![false; mesh.positions.len()];
     let mut count = 0;
     for (v, c) in moves.into_iter().flatten() {
-        if moved[v as usize] {
-            continue;
-        }
-        // Tried in place, taken back when a triangle around it turns over or collapses.
-        let before: Vec<Vector3<f64>> = ring[v as usize]
-            .iter()
-            .map(|&i| tri_normal(&mesh.positions, &mesh.faces[i as usize]))
-            .collect();
-        let old = std::mem::replace(&mut mesh.positions[v as usize], c);
-        let keeps = ring[v as usize].iter().zip(&before).all(|(&i, b)| {
-            let after = tri_normal(&mesh.positions, &mesh.faces[i as usize]);
-            after.dot(b) > 0.0 && after.norm() > 1e-3 * b.norm()
-        });
-        if keeps {
+        if !moved[v as usize] && move_unfolded(mesh, &ring, v, c) {
             moved[v as usize] = true;
             count += 1;
-        } else {
-            mesh.positions[v as usize] = old;
         }
     }
     count
+}
+
+/// The faces around each vertex, for [`move_unfolded`].
+pub(super) fn face_rings(mesh: &Mesh) -> Vec<Vec<u32>> {
+    let mut ring: Vec<Vec<u32>> = vec![Vec::new(); mesh.positions.len()];
+    for (i, f) in mesh.faces.iter().enumerate() {
+        for &v in f {
+            if let Some(r) = ring.get_mut(v as usize) {
+                r.push(i as u32);
+            }
+        }
+    }
+    ring
+}
+
+/// Moves vertex `v` to `c` unless a triangle around it (`ring`, [`face_rings`]) turns over or
+/// collapses; `true` when it moved.
+pub(super) fn move_unfolded(mesh: &mut Mesh, ring: &[Vec<u32>], v: u32, c: Point3<f64>) -> bool {
+    let faces = &ring[v as usize];
+    let before: Vec<Vector3<f64>> = faces
+        .iter()
+        .map(|&i| tri_normal(&mesh.positions, &mesh.faces[i as usize]))
+        .collect();
+    let old = std::mem::replace(&mut mesh.positions[v as usize], c);
+    let keeps = faces.iter().zip(&before).all(|(&i, b)| {
+        let after = tri_normal(&mesh.positions, &mesh.faces[i as usize]);
+        after.dot(b) > 0.0 && after.norm() > 1e-3 * b.norm()
+    });
+    if !keeps {
+        mesh.positions[v as usize] = old;
+    }
+    keeps
 }
 
 #[cfg(test)]

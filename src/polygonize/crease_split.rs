@@ -86,6 +86,9 @@ pub struct CreaseSplitReport {
     /// Vertices beside a crease whose edges across it stayed whole, moved onto it
     /// ([`super::crease_snap`]).
     pub snapped_vertices: usize,
+    /// Corners the fold guard dropped, put back by moving the vertex nearest to each onto it
+    /// ([`super::corner_snap`]).
+    pub snapped_corners: usize,
 }
 
 /// The point where the surfaces of `regions` meet nearest to `start` (two regions: a crease
@@ -255,17 +258,41 @@ pub fn split_at_creases(
         if bad.is_empty() {
             break;
         }
+        // Edges of triangles with a corner point: their splits are dropped last.
+        let corner_edges: HashSet<(u32, u32)> = corner_of
+            .keys()
+            .flat_map(|&i| {
+                let f = mesh.faces[i];
+                (0..3).map(move |k| edge_key(f[k], f[(k + 1) % 3]))
+            })
+            .collect();
         for i in bad {
             let f = mesh.faces[i];
-            for k in 0..3 {
-                split.remove(&edge_key(f[k], f[(k + 1) % 3]));
-            }
             corner_of.remove(&i);
+            if !drop_one_split(&f, &mut split, &corner_edges, pos) {
+                for k in 0..3 {
+                    split.remove(&edge_key(f[k], f[(k + 1) % 3]));
+                }
+            }
         }
         corner_of.retain(|&i, _| all_split(&mesh.faces[i], &split));
     }
     report.split_edges = split.len();
     report.corners = corner_of.len();
+    // Corners the guard dropped, with the longest edge of their triangle as reach.
+    let lost: Vec<(Point3<f64>, f64)> = corner_faces
+        .iter()
+        .zip(&corner_pts)
+        .filter(|(i, _)| !corner_of.contains_key(i))
+        .filter_map(|(&i, c)| {
+            let f = mesh.faces[i];
+            let p = f.map(|v| mesh.positions[v as usize]);
+            let reach = (0..3)
+                .map(|k| (p[(k + 1) % 3] - p[k]).norm())
+                .fold(0.0, f64::max);
+            c.map(|c| (c, reach))
+        })
+        .collect();
     let mut faces = Vec::with_capacity(mesh.faces.len() + 2 * split.len());
     for (i, f) in mesh.faces.iter().enumerate() {
         faces.extend(pieces(
@@ -297,7 +324,43 @@ pub fn split_at_creases(
     report.flipped_edges = super::crease_flip::flip_across_creases(mesh, &label, first_new);
     report.snapped_vertices =
         super::crease_snap::snap_to_creases(mesh, field, &label, first_new, opts);
+    report.snapped_corners = super::corner_snap::snap_to_corners(mesh, &lost);
     report
+}
+
+/// A triangle of the fold guard with two or three splits gives up only one of them when that
+/// is enough for none of its pieces to turn over: on a curved crease cut by thin triangles two
+/// crease points close together can lie in the wrong order along the crease for the triangle's
+/// pieces, while either alone splits it well; dropping both left the edge across the crease,
+/// and the neighbour sharing it then lost its splits too (make_parts' block from its mesh: the
+/// hole's top rim cut off by 0.07 mm). The first such edge in the triangle's order is dropped,
+/// edges of `corner_edges` (the triangles that get a corner point) last; `true` when one was.
+fn drop_one_split(
+    f: &[u32; 3],
+    split: &mut HashMap<(u32, u32), u32>,
+    corner_edges: &HashSet<(u32, u32)>,
+    pos: &[Point3<f64>],
+) -> bool {
+    let n = tri_normal(pos, f);
+    let mut keys: Vec<(u32, u32)> = (0..3)
+        .map(|k| edge_key(f[k], f[(k + 1) % 3]))
+        .filter(|e| split.contains_key(e))
+        .collect();
+    keys.sort_by_key(|e| corner_edges.contains(e));
+    if keys.len() < 2 {
+        return false;
+    }
+    for e in keys {
+        let Some(v) = split.remove(&e) else { continue };
+        if pieces(f, split, None, pos)
+            .iter()
+            .all(|t| tri_normal(pos, t).dot(&n) > 0.0)
+        {
+            return true;
+        }
+        split.insert(e, v);
+    }
+    false
 }
 
 /// Rounds of the fold guard at most.
@@ -373,11 +436,22 @@ fn pieces(
             let k = (0..3).find(|&k| m[(k + 1) % 3].is_none()).unwrap_or(0);
             let (a, b, c) = (f[k], f[(k + 1) % 3], f[(k + 2) % 3]);
             let (x, y) = (m[k].unwrap_or(a), m[(k + 2) % 3].unwrap_or(a));
-            if dist2(x, c) <= dist2(b, y) {
-                vec![[a, x, y], [x, b, c], [x, c, y]]
-            } else {
-                vec![[a, x, y], [x, b, y], [b, c, y]]
-            }
+            // The quad (x, b, c, y) along its shorter diagonal, unless only the other keeps
+            // both halves facing the triangle's way: two crease points close together on a
+            // curved crease make the quad a dart, and the fold guard would then drop both
+            // splits (and the next triangle's, in a cascade).
+            let n = tri_normal(pos, f);
+            let faces_on = |t: &[[u32; 3]; 2]| t.iter().all(|t| tri_normal(pos, t).dot(&n) > 0.0);
+            let along_xc = [[x, b, c], [x, c, y]];
+            let along_by = [[x, b, y], [b, c, y]];
+            let shorter_xc = dist2(x, c) <= dist2(b, y);
+            let quad = match (faces_on(&along_xc), faces_on(&along_by)) {
+                (true, false) => along_xc,
+                (false, true) => along_by,
+                _ if shorter_xc => along_xc,
+                _ => along_by,
+            };
+            vec![[a, x, y], quad[0], quad[1]]
         }
     }
 }
@@ -537,6 +611,61 @@ mod tests {
                 .collect();
             assert!(regions.len() <= 1, "{f:?} {:?}", mesh.positions);
         }
+    }
+
+    #[test]
+    fn a_dart_quad_is_split_along_the_diagonal_that_does_not_fold() {
+        // Crease points x on (a, b) and y on (c, a) leave the quad (x, b, c, y) a dart, reflex
+        // at y: its shorter diagonal (x, c) turns a half over, the other does not.
+        let pos = vec![
+            Point3::new(0.0, 0.0, 0.0),   // b
+            Point3::new(1.0, 0.0, 0.0),   // c
+            Point3::new(0.5, 1.0, 0.0),   // a
+            Point3::new(0.25, 0.5, 0.0),  // x on (a, b)
+            Point3::new(0.95, 0.03, 0.0), // y on (c, a)
+        ];
+        let f = [0, 1, 2];
+        let split: HashMap<(u32, u32), u32> = [(edge_key(2, 0), 3), (edge_key(1, 2), 4)]
+            .into_iter()
+            .collect();
+        assert!((pos[3] - pos[1]).norm() < (pos[0] - pos[4]).norm());
+        let n = tri_normal(&pos, &f);
+        let p = pieces(&f, &split, None, &pos);
+        assert_eq!(p.len(), 3);
+        assert!(p.iter().all(|t| tri_normal(&pos, t).dot(&n) > 0.0), "{p:?}");
+    }
+
+    #[test]
+    fn crossed_crease_points_give_up_one_split_not_both() {
+        // The triangle (b, c, a) facing +z, crease points found for its edges (c, a) and
+        // (a, b) in the wrong order (x of (a, b) right of y of (c, a)): the corner piece (a, x,
+        // y) turns over whatever the quad's diagonal, either split alone does not.
+        let pos = vec![
+            Point3::new(0.0, 0.0, 0.0), // b
+            Point3::new(1.0, 0.0, 0.0), // c
+            Point3::new(0.5, 1.0, 0.0), // a
+            Point3::new(0.6, 0.5, 0.0), // x on (a, b)
+            Point3::new(0.4, 0.5, 0.0), // y on (c, a)
+        ];
+        let f = [0, 1, 2];
+        let both: HashMap<(u32, u32), u32> = [(edge_key(2, 0), 3), (edge_key(1, 2), 4)]
+            .into_iter()
+            .collect();
+        let n = tri_normal(&pos, &f);
+        let folds = |s: &HashMap<(u32, u32), u32>| {
+            pieces(&f, s, None, &pos)
+                .iter()
+                .any(|t| tri_normal(&pos, t).dot(&n) <= 0.0)
+        };
+        assert!(folds(&both));
+        let mut split = both.clone();
+        assert!(drop_one_split(&f, &mut split, &HashSet::new(), &pos));
+        assert_eq!(split.len(), 1);
+        assert!(!folds(&split));
+        // One split only: nothing to choose.
+        let mut one: HashMap<(u32, u32), u32> = [(edge_key(2, 0), 3)].into_iter().collect();
+        assert!(!drop_one_split(&f, &mut one, &HashSet::new(), &pos));
+        assert_eq!(one.len(), 1);
     }
 
     #[test]

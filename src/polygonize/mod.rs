@@ -10,6 +10,7 @@
 //! target number of patches.
 
 pub mod components;
+pub mod corner_snap;
 pub mod crease_collapse;
 pub mod crease_flip;
 pub mod crease_labels;

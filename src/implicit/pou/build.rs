@@ -4,7 +4,6 @@
 use super::{Cell, CellRole, FitOptions};
 use crate::implicit::local::{self, LocalFit, LocalFunction, LocalParams};
 use crate::implicit::poly::Degree;
-use crate::implicit::sharp::{self, SharpFunction};
 use crate::mesh::Aabb;
 use crate::spatial::{BoxIndex, CellContext, Cube, Decision, KdTree};
 use nalgebra::{Point3, Vector3};
@@ -26,13 +25,6 @@ const BRIDGE_POINTS: usize = 8;
 /// A domain too small to split keeps a polynomial whose residual is within this many times the
 /// tolerance (the misfit is noise there).
 const LEAF_FACTOR: f64 = 1.5;
-
-/// A sharp function within this many times the tolerance is kept (module doc of
-/// [`crate::implicit::sharp`]): split further, a crease cell soon holds too few points of one
-/// side for a side of its own, and the smooth fits that take over round the crease off
-/// (make_parts' block from its mesh, `reconstruct --sharp`: 1 -> 2 takes the band normal error
-/// beside the creases from 4.1 to 1.3 degrees, p95).
-const SHARP_FACTOR: f64 = 2.0;
 
 /// A crease cell too small to split keeps its sharp function within this many times the
 /// tolerance, rather than a smooth fit or an RBF through its points, which rounds the crease or
@@ -89,11 +81,11 @@ impl Builder<'_> {
     }
 
     /// Indices of the points inside the box of half-width `h` around `c`.
-    fn in_box(&self, c: &Point3<f64>, h: f64) -> Vec<usize> {
+    pub(super) fn in_box(&self, c: &Point3<f64>, h: f64) -> Vec<usize> {
         self.boxes.within_box(c, h)
     }
 
-    fn leaf(&self, c: Point3<f64>, h: f64, n: usize, fit: LocalFit) -> Decision<Cell> {
+    pub(super) fn leaf(&self, c: Point3<f64>, h: f64, n: usize, fit: LocalFit) -> Decision<Cell> {
         self.leaf_with(c, h, n, fit, CellRole::Fitted)
     }
 
@@ -284,53 +276,6 @@ impl Builder<'_> {
             },
             CellRole::Fallback,
         )
-    }
-
-    /// A cell whose support holds points of two or three smooth regions (feature-aware fits
-    /// only): a sharp function ([`crate::implicit::sharp`]) when it is within [`SHARP_FACTOR`]
-    /// times the tolerance, a split when more than three regions meet in it. `Err` leaves the
-    /// cell to the smooth fits, with the sharp function that was fitted but missed the
-    /// tolerance (for [`SHARP_LEAF_FACTOR`]), if any.
-    #[allow(clippy::too_many_arguments)]
-    fn sharp_cell(
-        &self,
-        ctx: &CellContext,
-        c: &Point3<f64>,
-        h0: f64,
-        idx: &[usize],
-        p: &[Point3<f64>],
-        n: &[Vector3<f64>],
-        h: f64,
-    ) -> Result<Decision<Cell>, Option<Box<LocalFit>>> {
-        let Some(labels) = self.labels else {
-            return Err(None);
-        };
-        let l: Vec<u32> = idx.iter().map(|&i| labels[i]).collect();
-        let sides = sharp::region_groups(&l, sharp::MIN_SIDE).len();
-        if sides < 2 {
-            return Err(None);
-        }
-        if sides > sharp::MAX_SIDES {
-            return if ctx.can_split {
-                Ok(Decision::Split)
-            } else {
-                Err(None)
-            };
-        }
-        let Some(f) = SharpFunction::fit(p, n, &l, h, self.opts.min_normal_cos, 0.5 * self.tol)
-        else {
-            return Err(None);
-        };
-        let (values, agreement) = f.evaluate(p, n, self.tol);
-        let fit = LocalFit {
-            normal_agreement: agreement,
-            ..local::assess_values(LocalFunction::Sharp(f), &values, n)
-        };
-        if fit.max_residual <= SHARP_FACTOR * self.tol && fit.normal_agreement >= 1.0 {
-            Ok(self.leaf(*c, h0, p.len(), fit))
-        } else {
-            Err(Some(Box::new(fit)))
-        }
     }
 
     pub(super) fn decide(&self, ctx: &CellContext) -> Decision<Cell> {

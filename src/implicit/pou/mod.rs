@@ -60,6 +60,7 @@ use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 
 mod build;
+mod sharp_cell;
 use build::Builder;
 
 /// Options of [`PouImplicit::fit`], with documented defaults.

@@ -351,3 +351,87 @@ fn regions_keep_the_edges_of_a_box_sharp() {
     // Labels must match the points.
     assert!(PouImplicit::fit_with_regions(&p, &n, Some(&l[1..]), &FitOptions::default()).is_err());
 }
+
+/// Points every `1 / k` on the faces of the box [-1, 1] x [-1, 1] x [-0.5, 0.5] with a notch
+/// cut along y over x > `wall`, z > `floor`, with outward normals and one region per face.
+fn notched_box_points(
+    k: usize,
+    wall: f64,
+    floor: f64,
+) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>, Vec<u32>) {
+    let half = [1.0, 1.0, 0.5];
+    let solid =
+        |x: &Point3<f64>| (0..3).all(|a| x[a].abs() <= half[a]) && !(x.x > wall && x.z > floor);
+    // (normal, offset along it, region)
+    let planes: [(Vector3<f64>, f64, u32); 8] = [
+        (-Vector3::x(), 1.0, 0),
+        (Vector3::x(), 1.0, 1),
+        (-Vector3::y(), 1.0, 2),
+        (Vector3::y(), 1.0, 3),
+        (-Vector3::z(), 0.5, 4),
+        (Vector3::z(), 0.5, 5),
+        (Vector3::z(), floor, 6),
+        (Vector3::x(), wall, 7),
+    ];
+    let (mut p, mut n, mut l) = (Vec::new(), Vec::new(), Vec::new());
+    for (nrm, off, region) in planes {
+        let axis = (0..3).find(|&a| nrm[a] != 0.0).unwrap_or(0);
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let (nu, nv) = (
+            (2.0 * half[u] * k as f64) as usize,
+            (2.0 * half[v] * k as f64) as usize,
+        );
+        for i in 0..nu {
+            for j in 0..nv {
+                let mut x = Point3::origin();
+                x[axis] = off * nrm[axis];
+                x[u] = -half[u] + 2.0 * half[u] * (i as f64 + 0.5) / nu as f64;
+                x[v] = -half[v] + 2.0 * half[v] * (j as f64 + 0.5) / nv as f64;
+                // On the solid's boundary: solid just inside, not just outside.
+                let e = 1e-6;
+                if solid(&(x - nrm * e)) && !solid(&(x + nrm * e)) {
+                    p.push(x);
+                    n.push(nrm);
+                    l.push(region);
+                }
+            }
+        }
+    }
+    (p, n, l)
+}
+
+#[test]
+fn a_corner_whose_third_face_has_few_points_in_a_cell_stays_sharp() {
+    // The notch's floor and wall meet the box's sides y = +-1 in mixed corners (convex with the
+    // side, concave with each other). Cells beside a corner hold only a sliver of one of the
+    // three faces; their two-sided fits miss the points of the third and were left to smooth
+    // fits, which round the corner. On supports grown until that face has a side of its own,
+    // the three-sided function fits.
+    let (wall, floor) = (0.37, 0.13);
+    let (p, n, l) = notched_box_points(12, wall, floor);
+    let f = PouImplicit::fit_with_regions(&p, &n, Some(&l), &FitOptions::default()).unwrap();
+    let tol = 2.0 * f.stats().tolerance * f.diagonal();
+    let mut worst = (0.0, Point3::origin());
+    for y in [-1.0, 1.0] {
+        for t in 0..=10 {
+            let s = 0.03 * t as f64;
+            // along the three edges that leave each corner
+            for x in [
+                Point3::new(wall + s, y, floor),
+                Point3::new(wall, y, floor + s),
+                Point3::new(wall, y - y.signum() * s, floor),
+            ] {
+                let v = f.value(&x).abs();
+                if v > worst.0 {
+                    worst = (v, x);
+                }
+            }
+        }
+    }
+    assert!(
+        worst.0 <= tol,
+        "|F| {} at {:?}, tolerance {tol}",
+        worst.0,
+        worst.1
+    );
+}
