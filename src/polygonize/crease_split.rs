@@ -212,7 +212,8 @@ pub fn split_at_creases(
         .filter(|&i| all_split(&mesh.faces[i], &split))
         .collect();
     report.corner_triangles = corner_faces.len();
-    let corner_pts: Vec<Option<Point3<f64>>> = corner_faces
+    // Each corner with its triangle's longest edge (the reach of corner_snap).
+    let corner_pts: Vec<Option<(Point3<f64>, f64)>> = corner_faces
         .par_iter()
         .map(|&i| {
             let f = mesh.faces[i];
@@ -231,12 +232,12 @@ pub fn split_at_creases(
                 let (u, v) = (p[k], p[(k + 1) % 3]);
                 (v - u).cross(&(c - u)).dot(&n) > -CORNER_MARGIN * n.norm_squared()
             });
-            inside.then_some(c)
+            inside.then_some((c, scale))
         })
         .collect();
     let mut corner_of: HashMap<usize, u32> = HashMap::new();
     for (&i, c) in corner_faces.iter().zip(&corner_pts) {
-        if let Some(c) = c {
+        if let Some((c, _)) = c {
             corner_of.insert(i, mesh.positions.len() as u32);
             mesh.positions.push(*c);
         }
@@ -284,14 +285,7 @@ pub fn split_at_creases(
         .iter()
         .zip(&corner_pts)
         .filter(|(i, _)| !corner_of.contains_key(i))
-        .filter_map(|(&i, c)| {
-            let f = mesh.faces[i];
-            let p = f.map(|v| mesh.positions[v as usize]);
-            let reach = (0..3)
-                .map(|k| (p[(k + 1) % 3] - p[k]).norm())
-                .fold(0.0, f64::max);
-            c.map(|c| (c, reach))
-        })
+        .filter_map(|(_, c)| *c)
         .collect();
     let mut faces = Vec::with_capacity(mesh.faces.len() + 2 * split.len());
     for (i, f) in mesh.faces.iter().enumerate() {
