@@ -145,3 +145,38 @@ fn spot_mesh_has_no_features() {
     seg.absorb_small(0.01);
     assert!(!seg.has_features(), "{:?}", seg.stats);
 }
+
+#[test]
+fn corner_points_of_a_noisy_box_cloud_keep_their_own_face() {
+    // make_parts' density (16 points per mm^2) and noise (0.01 mm). Near a corner the growth
+    // stops short on all three faces (the neighbourhoods there straddle two creases); the
+    // points left over must go to the face they lie on, not to the first face whose front
+    // reaches them. Measured over these three clouds: at most 0.087 mm off the own face; 0.17,
+    // 0.19 and 1.13 mm when the first front took the corner.
+    for seed in [0x2545_f491_4f6c_dd1d, 12345, 987_654_321] {
+        let mut g = Gauss(seed);
+        let size = [24.0, 18.0, 12.0];
+        let input = cloud(box_cloud(size, 16.0, 0.01, &mut g));
+        let op = oriented_points(&input, 12).unwrap();
+        let seg = segment(&input, &op, &FeatureOptions::default()).unwrap();
+        assert_eq!(seg.regions.len(), 6, "seed {seed}: {:?}", seg.stats);
+        for (r, reg) in seg.regions.iter().enumerate() {
+            // The face: the axis and side its mean normal points along.
+            let mean: Vector3<f64> = reg.normals.iter().sum::<Vector3<f64>>();
+            let axis = (0..3)
+                .max_by(|&a, &b| mean[a].abs().total_cmp(&mean[b].abs()))
+                .unwrap();
+            let plane = if mean[axis] > 0.0 { size[axis] } else { 0.0 };
+            let max = reg
+                .points
+                .iter()
+                .map(|p| (p[axis] - plane).abs())
+                .fold(0.0, f64::max);
+            // Twelve times the noise.
+            assert!(
+                max < 0.12,
+                "seed {seed}, region {r} (axis {axis}): a point {max:.3} mm off its face"
+            );
+        }
+    }
+}
