@@ -375,6 +375,10 @@ pub fn segment_cloud(
             .filter(|b| b.1 <= limit)
             .map(|b| (b.0, b.2))
             .collect();
+        // Only scores that are not numbers (0 / 0 on degenerate data) are left: nothing moves.
+        if decided.is_empty() {
+            break;
+        }
         for (i, l) in decided {
             label[i] = l;
         }
