@@ -289,28 +289,40 @@ fn bad_input_is_an_error() {
     assert!(PouImplicit::fit(&p, &n, &bad).is_err());
 }
 
+/// Half-sizes of the box the fixtures below sample.
+const HALF: [f64; 3] = [1.0, 1.0, 0.5];
+
+/// Cell centres of a grid `k` per unit length over the plane x[axis] = `at`, clipped to the
+/// box [`HALF`]'s extent along the two other axes.
+fn plane_grid(axis: usize, at: f64, k: usize) -> Vec<Point3<f64>> {
+    let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+    let (nu, nv) = (
+        (2.0 * HALF[u] * k as f64) as usize,
+        (2.0 * HALF[v] * k as f64) as usize,
+    );
+    let mut out = Vec::with_capacity(nu * nv);
+    for i in 0..nu {
+        for j in 0..nv {
+            let mut x = Point3::origin();
+            x[axis] = at;
+            x[u] = -HALF[u] + 2.0 * HALF[u] * (i as f64 + 0.5) / nu as f64;
+            x[v] = -HALF[v] + 2.0 * HALF[v] * (j as f64 + 0.5) / nv as f64;
+            out.push(x);
+        }
+    }
+    out
+}
+
 /// Points on the faces of the box [-1, 1] x [-1, 1] x [-0.5, 0.5], `k` per unit length, with
 /// outward normals and their face as region (0..6).
 fn box_points(k: usize) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>, Vec<u32>) {
-    let half = [1.0, 1.0, 0.5];
     let (mut p, mut n, mut l) = (Vec::new(), Vec::new(), Vec::new());
-    for axis in 0..3 {
-        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-        let (nu, nv) = (
-            (2.0 * half[u] * k as f64) as usize,
-            (2.0 * half[v] * k as f64) as usize,
-        );
+    for (axis, half) in HALF.into_iter().enumerate() {
         for side in [-1.0, 1.0] {
-            for i in 0..nu {
-                for j in 0..nv {
-                    let mut x = Point3::origin();
-                    x[axis] = side * half[axis];
-                    x[u] = -half[u] + 2.0 * half[u] * (i as f64 + 0.5) / nu as f64;
-                    x[v] = -half[v] + 2.0 * half[v] * (j as f64 + 0.5) / nv as f64;
-                    p.push(x);
-                    n.push(Vector3::ith(axis, side));
-                    l.push((2 * axis) as u32 + u32::from(side > 0.0));
-                }
+            for x in plane_grid(axis, side * half, k) {
+                p.push(x);
+                n.push(Vector3::ith(axis, side));
+                l.push((2 * axis) as u32 + u32::from(side > 0.0));
             }
         }
     }
@@ -359,9 +371,8 @@ fn notched_box_points(
     wall: f64,
     floor: f64,
 ) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>, Vec<u32>) {
-    let half = [1.0, 1.0, 0.5];
     let solid =
-        |x: &Point3<f64>| (0..3).all(|a| x[a].abs() <= half[a]) && !(x.x > wall && x.z > floor);
+        |x: &Point3<f64>| (0..3).all(|a| x[a].abs() <= HALF[a]) && !(x.x > wall && x.z > floor);
     // (normal, offset along it, region)
     let planes: [(Vector3<f64>, f64, u32); 8] = [
         (-Vector3::x(), 1.0, 0),
@@ -376,24 +387,13 @@ fn notched_box_points(
     let (mut p, mut n, mut l) = (Vec::new(), Vec::new(), Vec::new());
     for (nrm, off, region) in planes {
         let axis = (0..3).find(|&a| nrm[a] != 0.0).unwrap_or(0);
-        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-        let (nu, nv) = (
-            (2.0 * half[u] * k as f64) as usize,
-            (2.0 * half[v] * k as f64) as usize,
-        );
-        for i in 0..nu {
-            for j in 0..nv {
-                let mut x = Point3::origin();
-                x[axis] = off * nrm[axis];
-                x[u] = -half[u] + 2.0 * half[u] * (i as f64 + 0.5) / nu as f64;
-                x[v] = -half[v] + 2.0 * half[v] * (j as f64 + 0.5) / nv as f64;
-                // On the solid's boundary: solid just inside, not just outside.
-                let e = 1e-6;
-                if solid(&(x - nrm * e)) && !solid(&(x + nrm * e)) {
-                    p.push(x);
-                    n.push(nrm);
-                    l.push(region);
-                }
+        for x in plane_grid(axis, off * nrm[axis], k) {
+            // On the solid's boundary: solid just inside, not just outside.
+            let e = 1e-6;
+            if solid(&(x - nrm * e)) && !solid(&(x + nrm * e)) {
+                p.push(x);
+                n.push(nrm);
+                l.push(region);
             }
         }
     }
