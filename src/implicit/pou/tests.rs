@@ -435,3 +435,46 @@ fn a_corner_whose_third_face_has_few_points_in_a_cell_stays_sharp() {
         worst.1
     );
 }
+
+#[test]
+fn an_edge_whose_second_face_is_sampled_coarsely_stays_sharp() {
+    // The box's face x = 1 sampled a third as densely as the others (a mesh's large flat
+    // triangles beside finely tessellated ones): cells along its edges hold one side and a
+    // point or two of it. Fitted on grown supports they keep a two-sided function; left to
+    // smooth fits they rounded the edges by 8 to 12 tolerances.
+    let (mut p, mut n, mut l) = (Vec::new(), Vec::new(), Vec::new());
+    for (axis, half) in HALF.into_iter().enumerate() {
+        for side in [-1.0, 1.0] {
+            let k = if axis == 0 && side > 0.0 { 6 } else { 20 };
+            for x in plane_grid(axis, side * half, k) {
+                p.push(x);
+                n.push(Vector3::ith(axis, side));
+                l.push((2 * axis) as u32 + u32::from(side > 0.0));
+            }
+        }
+    }
+    let f = PouImplicit::fit_with_regions(&p, &n, Some(&l), &FitOptions::default()).unwrap();
+    let tol = 2.0 * f.stats().tolerance * f.diagonal();
+    let mut worst = (0.0, Point3::origin());
+    for i in 0..=40 {
+        let t = -1.0 + 0.05 * i as f64;
+        // the four edges of the face x = 1
+        for x in [
+            Point3::new(1.0, t, 0.5),
+            Point3::new(1.0, t, -0.5),
+            Point3::new(1.0, 1.0, 0.5 * t),
+            Point3::new(1.0, -1.0, 0.5 * t),
+        ] {
+            let v = f.value(&x).abs();
+            if v > worst.0 {
+                worst = (v, x);
+            }
+        }
+    }
+    assert!(
+        worst.0 <= tol,
+        "|F| {} at {:?}, tolerance {tol}",
+        worst.0,
+        worst.1
+    );
+}
