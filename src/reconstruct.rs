@@ -177,12 +177,13 @@ pub fn reconstruct(
     let t = Instant::now();
     let f = match &segmentation {
         Some(seg) => {
-            // The points keep their own normals: one-sided normals beside a convex crease
-            // face away from each other, and the hole bridging of the empty cells there then
-            // widens its search to no end (make_parts' block from its cloud: 23 s against 2.8 s,
-            // and a worse crease).
-            let l = seg.labels_of(&op.points);
-            PouImplicit::fit_with_regions(&op.points, &op.normals, Some(&l), &opts.fit)?
+            // A cloud's points keep their own normals: one-sided normals beside a convex
+            // crease face away from each other, and the hole bridging of the empty cells there
+            // then widens its search to no end (make_parts' block from its cloud: 23 s against
+            // 2.8 s, and a worse crease). A mesh's may get their own region's
+            // (`features::MeshOptions::face_labels`).
+            let (l, n) = seg.labels_and_normals(&op.points, &op.normals);
+            PouImplicit::fit_with_regions(&op.points, &n, Some(&l), &opts.fit)?
         }
         None => PouImplicit::fit(&op.points, &op.normals, &opts.fit)?,
     };

@@ -179,12 +179,12 @@ pub fn mesh_creases(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::features::segment_mesh::{segment_mesh, MeshOptions};
 
     /// A closed axis-aligned box [0,2]x[0,1]x[0,1], each face split into a grid of triangles.
-    fn box_mesh(n: usize) -> Mesh {
+    pub(crate) fn box_mesh(n: usize) -> Mesh {
         let mut positions = Vec::new();
         let mut index = std::collections::BTreeMap::new();
         let mut faces = Vec::new();

@@ -16,6 +16,7 @@
 //! - [`crease_mesh`], [`crease_cloud`]: crease polylines and corners of each kind of input;
 //! - [`lines`]: the polylines and corners, and the steps both kinds share;
 //! - [`export`]: PLY files of the creases and of the labelled points;
+//! - [`face_labels`]: the region of a point on a segmented mesh, from its triangle;
 //! - [`net_regions`]: a patch network's quads labelled by region, its crease edges and nodes;
 //! - [`local_fit`]: the local quadratic height functions the segmentations use;
 //! - [`sharp_choice`]: whether a stage keeps the sharp edges (`--sharp on|off|auto`);
@@ -24,7 +25,8 @@
 //! A [`Segmentation`] holds each region's points with one-sided normals (normals beside a
 //! crease belong to their own face, not a blend of both), and a labelled point set that answers
 //! "which region is the surface near x": the input points of a cloud, the vertices and face
-//! centres of a mesh.
+//! centres of a mesh (or, with [`MeshOptions::face_labels`], the triangle a point lies on:
+//! [`face_labels`]).
 
 pub mod crease_cloud;
 pub mod crease_mesh;
@@ -32,6 +34,7 @@ pub mod data_sides;
 pub mod details;
 pub mod detect;
 pub mod export;
+pub mod face_labels;
 pub mod folds;
 pub mod grid_frame;
 pub mod lines;
@@ -105,6 +108,8 @@ pub struct Segmentation {
     label_points: Vec<Point3<f64>>,
     label_of: Vec<u32>,
     label_kd: KdTree,
+    /// A mesh's triangles with their regions (`None` for a cloud).
+    faces: Option<face_labels::FaceLabels>,
     pub stats: SegmentStats,
 }
 
@@ -124,6 +129,7 @@ impl Segmentation {
             label_points,
             label_of,
             label_kd,
+            faces: None,
             stats,
         })
     }
@@ -164,11 +170,38 @@ impl Segmentation {
         out
     }
 
-    /// The region of the labelled point nearest to each of `points`: the labels of a
-    /// feature-aware implicit ([`crate::implicit::PouImplicit::fit_with_regions`]) that keeps
-    /// every input point.
+    /// The region of each of `points`: the labels of a feature-aware implicit
+    /// ([`crate::implicit::PouImplicit::fit_with_regions`]) that keeps every input point. On a
+    /// mesh segmented with [`MeshOptions::face_labels`] the region of the triangle each point
+    /// lies on ([`face_labels`]), otherwise that of the labelled point nearest to it.
     pub fn labels_of(&self, points: &[Point3<f64>]) -> Vec<u32> {
-        points.iter().map(|p| self.region_near(p)).collect()
+        match &self.faces {
+            Some(f) => f.regions_at(points),
+            None => points.iter().map(|p| self.region_near(p)).collect(),
+        }
+    }
+
+    /// [`Self::labels_of`] the `points`, with normals: with [`MeshOptions::face_labels`] those
+    /// of their own region alone, from the faces of that region around the triangle each point
+    /// lies on ([`face_labels`]); otherwise `normals` as they are (see `reconstruct`).
+    pub fn labels_and_normals(
+        &self,
+        points: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+    ) -> (Vec<u32>, Vec<Vector3<f64>>) {
+        match &self.faces {
+            Some(f) => {
+                let (l, mut n) = f.regions_and_normals_at(points);
+                // A degenerate triangle gives no normal: the point keeps its own.
+                for (m, given) in n.iter_mut().zip(normals) {
+                    if m.norm_squared() == 0.0 {
+                        *m = *given;
+                    }
+                }
+                (l, n)
+            }
+            None => (self.labels_of(points), normals.to_vec()),
+        }
     }
 
     /// True when there is more than one region (something for the feature-aware stages to do).
@@ -231,6 +264,9 @@ impl Segmentation {
         for l in self.label_of.iter_mut() {
             *l = map[*l as usize];
         }
+        if let Some(f) = self.faces.as_mut() {
+            f.remap(map);
+        }
         let pairs = details::remap_pairs(&self.stats.pairs, map);
         self.stats.pairs = pairs;
         self.stats.regions = self.regions.len();
@@ -291,6 +327,7 @@ fn segment_points(op: &OrientedPoints, opts: &CloudOptions) -> Result<Segmentati
         label_points,
         label_of,
         label_kd,
+        faces: None,
     })
 }
 
@@ -373,6 +410,11 @@ fn segment_faces(mesh: &Mesh, op: &OrientedPoints, opts: &MeshOptions) -> Result
         regions.push(region);
     }
     let label_kd = KdTree::build(&label_points)?;
+    let faces = if opts.face_labels {
+        Some(face_labels::FaceLabels::new(mesh, l.face_label, sign)?)
+    } else {
+        None
+    };
     Ok(Segmentation {
         stats: SegmentStats {
             method: "mesh",
@@ -386,5 +428,6 @@ fn segment_faces(mesh: &Mesh, op: &OrientedPoints, opts: &MeshOptions) -> Result
         label_points,
         label_of,
         label_kd,
+        faces,
     })
 }

@@ -258,9 +258,65 @@ impl SharpFunction {
             1 => (kind(r01), kind(r02)),
             _ => (kind(r02), kind(r01)),
         };
+        let by_medians = (first, outer, inner);
+        let (first, outer, inner) = corner_structure(&sides, points, flat, by_medians);
         sides.swap(0, first);
         SharpFunction::new(sides, outer, inner)
     }
+}
+
+/// How three sides combine at a corner: `(first, outer, inner)` for
+/// F = outer(f_first, inner(f_b, f_c)), the other two sides in their order. The structure the
+/// pairwise median tests give (`by_medians`) is kept when it leaves no point farther than
+/// `flat`; otherwise the one of the eight (max or min of all three, or one side combined
+/// one way with the other two combined the other way) with the smallest largest residual
+/// over all the domain's `points`. The medians fail at a mixed corner whose domain lies
+/// mostly on one side of the concave edge: a V groove's root meeting an end face, the
+/// domain over one flank; there the end face's points lie outside the other flank's plane as
+/// often as inside it, and the pair was taken for concave (make_parts-style V block from its
+/// mesh: 0.35 mm off where the groove meets the end face).
+fn corner_structure(
+    sides: &[SharpSide],
+    points: &[Point3<f64>],
+    flat: f64,
+    by_medians: (usize, Combine, Combine),
+) -> (usize, Combine, Combine) {
+    let values: Vec<[f64; 3]> = points
+        .iter()
+        .map(|x| [0, 1, 2].map(|k| sides[k].poly.value(x)))
+        .collect();
+    let worst = |(first, outer, inner): (usize, Combine, Combine)| -> f64 {
+        let (b, c) = match first {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
+        values
+            .iter()
+            .map(|v| outer.pick(v[first], inner.pick(v[b], v[c]).0).0.abs())
+            .fold(0.0, f64::max)
+    };
+    let mut best = (by_medians, worst(by_medians));
+    if best.1 <= flat {
+        return by_medians;
+    }
+    for first in 0..3 {
+        for (outer, inner) in [
+            (Combine::Max, Combine::Max),
+            (Combine::Min, Combine::Min),
+            (Combine::Max, Combine::Min),
+            (Combine::Min, Combine::Max),
+        ] {
+            if outer == inner && first > 0 {
+                continue;
+            }
+            let w = worst((first, outer, inner));
+            if w < best.1 {
+                best = ((first, outer, inner), w);
+            }
+        }
+    }
+    best.0
 }
 
 /// Regions with at least `min` of `labels`, with the indices of their points, largest first
@@ -584,6 +640,46 @@ mod tests {
         for q in &p {
             assert!(f.value(q).abs() < 1e-9, "{q}: {}", f.value(q));
         }
+    }
+
+    #[test]
+    fn a_groove_meeting_an_end_face_is_nested_right_off_its_root() {
+        // The solid { x >= 0 } ∩ { z <= |y| }: a V groove along x, its root on the x axis,
+        // meeting the end face x = 0 (region 0, convex with both flanks); the flanks z = y
+        // (1) and z = -y (2) meet concavely. The domain lies mostly over flank 1, so most of
+        // the end face's points are outside flank 2's plane: the medians call that pair
+        // concave, and F = min(...) misses the end face.
+        let (mut p, mut n, mut l) = (Vec::new(), Vec::new(), Vec::new());
+        let k = 10;
+        let s2 = std::f64::consts::FRAC_1_SQRT_2;
+        for i in 0..=2 * k {
+            for j in 0..=2 * k {
+                let (a, b) = (i as f64 / k as f64, j as f64 / k as f64);
+                // End face over y in [-0.2, 1.8], z in [-0.7, 1.3], inside the solid.
+                let (y, z) = (a - 0.2, b - 0.7);
+                if z < y.abs() - 1e-9 {
+                    p.push(Point3::new(0.0, y, z));
+                    n.push(-Vector3::x());
+                    l.push(0);
+                }
+                // Flanks over x in (0, 0.6], y in [-0.2, 1.8].
+                let (x, y) = (0.05 + 0.55 * b / 2.0, a - 0.2);
+                if y.abs() > 1e-9 {
+                    p.push(Point3::new(x, y, y.abs()));
+                    n.push(Vector3::new(0.0, -y.signum() * s2, s2));
+                    l.push(if y > 0.0 { 1 } else { 2 });
+                }
+            }
+        }
+        let f = SharpFunction::fit(&p, &n, &l, 1.0, 0.3, 1e-9).unwrap();
+        assert_eq!(f.sides()[0].region, 0, "the end face goes first");
+        assert_eq!(f.combination(), (Combine::Max, Combine::Min));
+        for q in &p {
+            assert!(f.value(q).abs() < 1e-9, "{q}: {}", f.value(q));
+        }
+        assert!(f.value(&Point3::new(0.5, 0.0, -0.3)) < 0.0);
+        assert!(f.value(&Point3::new(0.5, 0.3, 0.6)) > 0.0);
+        assert!(f.value(&Point3::new(-0.2, 0.3, 0.0)) > 0.0);
     }
 
     #[test]
