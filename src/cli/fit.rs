@@ -132,6 +132,9 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
     if let Some(p) = &a.net {
         super::check_ext(p, &["obj"], "the quad net")?;
     }
+    if let Some(p) = &a.report {
+        crate::io::atomic::check_target(p)?;
+    }
     // `auto` is decided once the input is read (a mesh or a cloud).
     let auto_fill = a.fill_holes == "auto";
     let mut local_fill: Option<FillMethod> = match a.fill_holes.as_str() {

@@ -122,7 +122,8 @@ pub fn run() -> i32 {
 }
 
 /// Refuses an output path whose extension is none of `allowed` (lower case, without the dot),
-/// naming the file and what it is for.
+/// naming the file and what it is for, or that cannot be written
+/// ([`crate::io::atomic::check_target`]: a directory, or in a directory that does not exist).
 pub(crate) fn check_ext(path: &std::path::Path, allowed: &[&str], what: &str) -> crate::Result<()> {
     let ext = path
         .extension()
@@ -130,7 +131,7 @@ pub(crate) fn check_ext(path: &std::path::Path, allowed: &[&str], what: &str) ->
         .map(|e| e.to_ascii_lowercase())
         .unwrap_or_default();
     if allowed.contains(&ext.as_str()) {
-        Ok(())
+        crate::io::atomic::check_target(path).map(|_| ())
     } else {
         let names: Vec<String> = allowed.iter().map(|e| format!(".{e}")).collect();
         Err(crate::Error::unsupported(

@@ -48,11 +48,10 @@ impl Drop for Listed {
     }
 }
 
-/// Writes `path` through `body`, atomically.
-pub fn write_atomic<F>(path: &Path, body: F) -> Result<()>
-where
-    F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
-{
+/// The directory `path` would be written in; errors, naming the file, when `path` is a
+/// directory or its directory does not exist. Commands call it on their outputs before they
+/// start, so a typo in a path does not cost a whole run.
+pub fn check_target(path: &Path) -> Result<std::path::PathBuf> {
     if path.is_dir() {
         return Err(Error::content(
             path,
@@ -69,6 +68,15 @@ where
             format!("output directory {} does not exist", dir.display()),
         ));
     }
+    Ok(dir)
+}
+
+/// Writes `path` through `body`, atomically.
+pub fn write_atomic<F>(path: &Path, body: F) -> Result<()>
+where
+    F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
+{
+    let dir = check_target(path)?;
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())

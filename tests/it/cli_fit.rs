@@ -443,6 +443,18 @@ fn bad_options_leave_nothing() {
             vec!["--fill-holes", "glue"],
             "expected auto, implicit, none, rbf",
         ),
+        // Outputs in a directory that does not exist: refused before the fit, not after it.
+        ("missing/x.step", vec![], "output directory"),
+        (
+            "x.step",
+            vec!["--report", "no-such-dir-of-scansurf/r.json"],
+            "output directory",
+        ),
+        (
+            "x.step",
+            vec!["--preview", "no-such-dir-of-scansurf/p.png"],
+            "output directory",
+        ),
     ] {
         let o = bin()
             .arg("fit")
