@@ -184,11 +184,11 @@ impl Segmentation {
     /// [`Self::labels_of`] the `points`, with normals: with [`MeshOptions::face_labels`] those
     /// of their own region alone, from the faces of that region around the triangle each point
     /// lies on ([`face_labels`]); otherwise `normals` as they are (see `reconstruct`).
-    pub fn labels_and_normals(
+    pub fn labels_and_normals<'a>(
         &self,
         points: &[Point3<f64>],
-        normals: &[Vector3<f64>],
-    ) -> (Vec<u32>, Vec<Vector3<f64>>) {
+        normals: &'a [Vector3<f64>],
+    ) -> (Vec<u32>, std::borrow::Cow<'a, [Vector3<f64>]>) {
         match &self.faces {
             Some(f) => {
                 let (l, mut n) = f.regions_and_normals_at(points);
@@ -198,9 +198,9 @@ impl Segmentation {
                         *m = *given;
                     }
                 }
-                (l, n)
+                (l, n.into())
             }
-            None => (self.labels_of(points), normals.to_vec()),
+            None => (self.labels_of(points), normals.into()),
         }
     }
 

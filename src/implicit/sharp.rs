@@ -487,23 +487,14 @@ mod tests {
         // it out and has eight points, too few for a quadratic; a plane through the strip
         // missed the others by 0.3.
         let r = 7.0;
-        let (mut p, mut n) = (Vec::new(), Vec::new());
-        for (x, k) in [(0.0, 5), (0.75, 4)] {
-            for j in 0..k {
-                let a = (-17.5 + 35.0 * j as f64 / (k - 1) as f64).to_radians();
-                let m = Vector3::new(0.0, a.sin(), a.cos());
-                p.push(Point3::new(x, 0.0, 0.0) + m * r);
-                n.push(m);
-            }
-        }
+        let (mut p, n) = strip(|x, t| {
+            let a = (-17.5 + 35.0 * t).to_radians();
+            let m = Vector3::new(0.0, a.sin(), a.cos());
+            (Point3::new(x, 0.0, 0.0) + m * r, m)
+        });
         p[2] += n[2] * 0.05;
         let h = fit_side(&p, &n, 2.4, 0.3, 0.01).unwrap();
-        let worst = p
-            .iter()
-            .enumerate()
-            .filter(|&(i, _)| i != 2)
-            .map(|(_, x)| h.value(x).abs())
-            .fold(0.0, f64::max);
+        let worst = worst_but(&h, &p, 2);
         assert!(worst < 0.03, "{worst}");
     }
 
@@ -512,22 +503,32 @@ mod tests {
         // Nine points of the plane z = 0 in two rows (as above, flattened), one of them
         // 0.05 off it (a point of the other face given this region): the second fit, on the
         // eight others, is a plane, and exact; the quadratic through all nine is not.
-        let (mut p, mut n) = (Vec::new(), Vec::new());
-        for (x, k) in [(0.0, 5), (0.75, 4)] {
-            for j in 0..k {
-                p.push(Point3::new(x, -2.0 + 4.0 * j as f64 / (k - 1) as f64, 0.0));
-                n.push(Vector3::z());
-            }
-        }
+        let (mut p, n) = strip(|x, t| (Point3::new(x, -2.0 + 4.0 * t, 0.0), Vector3::z()));
         p[2].z += 0.05;
         let h = fit_side(&p, &n, 2.4, 0.3, 0.01).unwrap();
-        let worst = p
-            .iter()
-            .enumerate()
-            .filter(|&(i, _)| i != 2)
-            .map(|(_, x)| h.value(x).abs())
-            .fold(0.0, f64::max);
+        let worst = worst_but(&h, &p, 2);
         assert!(worst < 1e-9, "{worst}");
+    }
+
+    /// Nine points in two rows, five at x = 0 and four at x = 0.75, placed by `at(x, t)`
+    /// (t from 0 to 1 along each row), with their normals.
+    fn strip(
+        at: impl Fn(f64, f64) -> (Point3<f64>, Vector3<f64>),
+    ) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>) {
+        [(0.0, 5), (0.75, 4)]
+            .into_iter()
+            .flat_map(|(x, k)| (0..k).map(move |j| (x, j as f64 / (k - 1) as f64)))
+            .map(|(x, t)| at(x, t))
+            .unzip()
+    }
+
+    /// The largest |h| over `p` but its point `skip`.
+    fn worst_but(h: &HeightPoly, p: &[Point3<f64>], skip: usize) -> f64 {
+        p.iter()
+            .enumerate()
+            .filter(|&(i, _)| i != skip)
+            .map(|(_, x)| h.value(x).abs())
+            .fold(0.0, f64::max)
     }
 
     #[test]
