@@ -235,6 +235,16 @@ pub fn split_at_creases(
             inside.then_some((c, scale))
         })
         .collect();
+    // Corners around a vertex, in no triangle (super::ring_corners).
+    let triangle_corners: Vec<(Point3<f64>, f64)> = corner_pts.iter().flatten().copied().collect();
+    let ring = super::ring_corners::ring_corners(
+        &mesh.positions[..first_new],
+        &mesh.faces,
+        &label,
+        field,
+        opts,
+        &triangle_corners,
+    );
     let mut corner_of: HashMap<usize, u32> = HashMap::new();
     for (&i, c) in corner_faces.iter().zip(&corner_pts) {
         if let Some((c, _)) = c {
@@ -286,6 +296,7 @@ pub fn split_at_creases(
         .zip(&corner_pts)
         .filter(|(i, _)| !corner_of.contains_key(i))
         .filter_map(|(_, c)| *c)
+        .chain(ring)
         .collect();
     let mut faces = Vec::with_capacity(mesh.faces.len() + 2 * split.len());
     for (i, f) in mesh.faces.iter().enumerate() {
@@ -451,13 +462,13 @@ fn pieces(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::mesh::Topology;
 
     /// The cube [-1, 1]^3 as a sharp field: region k of face k (0..6: -x, +x, -y, +y, -z, +z),
     /// each side the plane of its face.
-    struct Cube;
+    pub(in crate::polygonize) struct Cube;
     impl SideField for Cube {
         fn region(&self, x: &Point3<f64>) -> u32 {
             let a = x.coords.abs();

@@ -19,6 +19,7 @@ pub mod crease_snap;
 pub mod crease_split;
 pub mod marching_cubes;
 pub mod relax;
+pub mod ring_corners;
 pub mod subdivide;
 
 pub mod log_map;

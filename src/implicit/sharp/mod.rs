@@ -26,14 +26,14 @@
 //! [`SharpFunction::side_value_and_gradient`] evaluates one side alone (the crease's two
 //! surfaces for the net and patch stages, Newton on f_a = f_b = 0).
 
-use super::poly::{Degree, Frame, HeightPoly};
+mod side;
+
+use super::poly::HeightPoly;
 use nalgebra::{Point3, Vector3};
+use side::{fit_side, median};
 
 /// Fewest points of one region in a domain for a side of its own.
 pub const MIN_SIDE: usize = 4;
-
-/// Fewest points for a quadratic side (a plane below; [`HeightPoly::fit`] needs 9).
-const QUADRATIC_FROM: usize = 9;
 
 /// Most sides of one sharp function (an edge: 2, a corner: 3; more are split further).
 pub const MAX_SIDES: usize = 3;
@@ -206,7 +206,7 @@ impl SharpFunction {
 
     /// Fits a sharp function to a domain's points: `labels[i]` is the region of `points[i]`
     /// ([`NO_REGION`] for none), `normals` their one-sided unit normals, `scale` the domain's
-    /// length scale, `min_normal_cos` the height-function test of [`Frame::from_normals`]. A
+    /// length scale, `min_normal_cos` the height-function test of [`crate::implicit::poly::Frame::from_normals`]. A
     /// side stays a plane when that leaves none of its points farther than `flat` (a plane
     /// extended past the crease stays where the face is; a quadratic bends away from it).
     /// `None` unless two or three regions hold at least [`MIN_SIDE`] points each and every side
@@ -333,102 +333,6 @@ pub fn region_groups(labels: &[u32], min: usize) -> Vec<(u32, Vec<usize>)> {
     out
 }
 
-/// One side's height polynomial: a plane when it leaves no point farther than `flat`, else a
-/// quadratic (from [`QUADRATIC_FROM`] points); fitted, then fitted again without the points
-/// farther than three times the median residual (a few points of the other face given to this
-/// region beside the crease tilt it otherwise), of the same degree.
-fn fit_side(
-    p: &[Point3<f64>],
-    n: &[Vector3<f64>],
-    scale: f64,
-    min_normal_cos: f64,
-    flat: f64,
-) -> Option<HeightPoly> {
-    let frame = side_frame(p, n, scale, min_normal_cos)?;
-    let plane = HeightPoly::fit(p, frame, Degree::Linear).ok()?;
-    let is_flat = p.iter().all(|x| plane.value(x).abs() <= flat);
-    let degree = |k: usize| {
-        if !is_flat && k >= QUADRATIC_FROM {
-            Degree::Quadratic
-        } else {
-            Degree::Linear
-        }
-    };
-    if is_flat {
-        return Some(plane);
-    }
-    let first = HeightPoly::fit(p, frame, degree(p.len())).ok()?;
-    let r: Vec<f64> = p.iter().map(|x| first.value(x).abs()).collect();
-    let cut = 3.0 * median(r.iter().copied());
-    let kept: Vec<Point3<f64>> = p
-        .iter()
-        .zip(&r)
-        .filter(|(_, &ri)| ri <= cut)
-        .map(|(x, _)| *x)
-        .collect();
-    if kept.len() == p.len() || kept.len() < MIN_SIDE {
-        return Some(first);
-    }
-    let Ok(second) = HeightPoly::fit(&kept, frame, degree(kept.len())) else {
-        return Some(first);
-    };
-    // A second fit of a lower degree (too few points left for a quadratic) is kept only when
-    // it follows the kept points at least as well as the first: a plane through a curved
-    // strip (nine points on a cylinder of radius 7 over 35 degrees, one of them cut) misses
-    // it by a third of a millimetre, while a flat side rid of the other face's point is
-    // exact.
-    if degree(kept.len()) != degree(p.len()) {
-        let worst = |h: &HeightPoly| kept.iter().map(|x| h.value(x).abs()).fold(0.0, f64::max);
-        if worst(&second) > worst(&first) {
-            return Some(first);
-        }
-    }
-    Some(second)
-}
-
-/// The height frame of one side's points: along their mean normal, when every normal is within
-/// `min_normal_cos` of it. Failing that, the frame of the points whose normals are within it of
-/// the mean of the unit normals, the others left out (a normal estimated across the crease, or
-/// a point of the other face given this region's label: one in twenty beside the crease of a
-/// noisy cloud), as long as at least [`MIN_SIDE`] points and [`SIDE_KEEP`] of the side remain.
-/// The left-out points are still fitted (the residual cut of [`fit_side`] drops the other
-/// face's) and still count in the cell's assessment.
-fn side_frame(
-    p: &[Point3<f64>],
-    n: &[Vector3<f64>],
-    scale: f64,
-    min_normal_cos: f64,
-) -> Option<Frame> {
-    if let Some(f) = Frame::from_normals(p, n, scale, min_normal_cos) {
-        return Some(f);
-    }
-    let mean: Vector3<f64> = n.iter().map(|m| m.try_normalize(1e-12).unwrap_or(*m)).sum();
-    let mean = mean.try_normalize(1e-12)?;
-    let (kp, kn): (Vec<Point3<f64>>, Vec<Vector3<f64>>) = p
-        .iter()
-        .zip(n)
-        .filter(|(_, m)| m.dot(&mean) >= min_normal_cos * m.norm())
-        .map(|(x, m)| (*x, *m))
-        .unzip();
-    if kp.len() < MIN_SIDE || (kp.len() as f64) < SIDE_KEEP * p.len() as f64 {
-        return None;
-    }
-    Frame::from_normals(&kp, &kn, scale, min_normal_cos)
-}
-
-/// The share of a side's points whose normals must agree for [`side_frame`] to drop the rest.
-const SIDE_KEEP: f64 = 0.8;
-
-/// Median of the values (0 for none).
-fn median(values: impl Iterator<Item = f64>) -> f64 {
-    let mut v: Vec<f64> = values.collect();
-    if v.is_empty() {
-        return 0.0;
-    }
-    let m = v.len() / 2;
-    *v.select_nth_unstable_by(m, f64::total_cmp).1
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -478,57 +382,6 @@ mod tests {
             .unwrap();
         assert!((v - 0.2).abs() < 1e-9 && (g - Vector3::y()).norm() < 1e-9);
         assert!(f.side_value_and_gradient(7, &Point3::origin()).is_none());
-    }
-
-    #[test]
-    fn a_curved_side_of_nine_points_stays_quadratic_when_one_is_cut() {
-        // Nine points on a cylinder of radius 7 (axis x) over 35 degrees, in two rows 0.75
-        // apart (a mesh's strip beside a shoulder), one pushed 0.05 off: the second fit leaves
-        // it out and has eight points, too few for a quadratic; a plane through the strip
-        // missed the others by 0.3.
-        let r = 7.0;
-        let (mut p, n) = strip(|x, t| {
-            let a = (-17.5 + 35.0 * t).to_radians();
-            let m = Vector3::new(0.0, a.sin(), a.cos());
-            (Point3::new(x, 0.0, 0.0) + m * r, m)
-        });
-        p[2] += n[2] * 0.05;
-        let h = fit_side(&p, &n, 2.4, 0.3, 0.01).unwrap();
-        let worst = worst_but(&h, &p, 2);
-        assert!(worst < 0.03, "{worst}");
-    }
-
-    #[test]
-    fn a_flat_side_of_nine_points_drops_the_other_face_s_point() {
-        // Nine points of the plane z = 0 in two rows (as above, flattened), one of them
-        // 0.05 off it (a point of the other face given this region): the second fit, on the
-        // eight others, is a plane, and exact; the quadratic through all nine is not.
-        let (mut p, n) = strip(|x, t| (Point3::new(x, -2.0 + 4.0 * t, 0.0), Vector3::z()));
-        p[2].z += 0.05;
-        let h = fit_side(&p, &n, 2.4, 0.3, 0.01).unwrap();
-        let worst = worst_but(&h, &p, 2);
-        assert!(worst < 1e-9, "{worst}");
-    }
-
-    /// Nine points in two rows, five at x = 0 and four at x = 0.75, placed by `at(x, t)`
-    /// (t from 0 to 1 along each row), with their normals.
-    fn strip(
-        at: impl Fn(f64, f64) -> (Point3<f64>, Vector3<f64>),
-    ) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>) {
-        [(0.0, 5), (0.75, 4)]
-            .into_iter()
-            .flat_map(|(x, k)| (0..k).map(move |j| (x, j as f64 / (k - 1) as f64)))
-            .map(|(x, t)| at(x, t))
-            .unzip()
-    }
-
-    /// The largest |h| over `p` but its point `skip`.
-    fn worst_but(h: &HeightPoly, p: &[Point3<f64>], skip: usize) -> f64 {
-        p.iter()
-            .enumerate()
-            .filter(|&(i, _)| i != skip)
-            .map(|(_, x)| h.value(x).abs())
-            .fold(0.0, f64::max)
     }
 
     #[test]
