@@ -86,8 +86,9 @@ pub struct CreaseSplitReport {
     /// Vertices beside a crease whose edges across it stayed whole, moved onto it
     /// ([`super::crease_snap`]).
     pub snapped_vertices: usize,
-    /// Corners the fold guard dropped, put back by moving the vertex nearest to each onto it
-    /// ([`super::corner_snap`]).
+    /// Corners the fold guard dropped, and corners where three regions meet around a vertex
+    /// and in no triangle ([`super::ring_corners`]), put in by moving the vertex nearest to
+    /// each onto it ([`super::corner_snap`]).
     pub snapped_corners: usize,
 }
 
