@@ -11,9 +11,9 @@
 //! exactly three regions, the point where the three sides meet is found by
 //! [`super::crease_split::meet_point`] from `v` (the 3 x 3 Newton iteration of that module's
 //! doc), and kept when it lies within the ring's longest edge of `v`. Rings of one corner give
-//! one corner: a candidate within the reach of one kept before with the same regions, or of a
-//! corner of a triangle, is dropped. Vertices are visited in index order, so the result does not
-//! depend on the thread count. The corners are then snapped like those the fold guard dropped
+//! one corner: a candidate within the larger of the two reaches of one kept before with the
+//! same regions, or of a corner of a triangle (of any regions), is dropped. Vertices are
+//! visited in index order, so the result does not depend on the thread count. The corners are then snapped like those the fold guard dropped
 //! ([`super::corner_snap`]).
 
 use super::crease_split::{meet_point, CreaseSplitOptions, SideField};
@@ -33,20 +33,44 @@ pub fn ring_corners(
     opts: &CreaseSplitOptions,
     known: &[(Point3<f64>, f64)],
 ) -> Vec<(Point3<f64>, f64)> {
-    let mut nbr: Vec<Vec<u32>> = vec![Vec::new(); pos.len()];
-    for f in faces {
-        for k in 0..3 {
-            let (a, b) = (f[k] as usize, f[(k + 1) % 3]);
-            if a < pos.len() && !nbr[a].contains(&b) {
-                nbr[a].push(b);
+    // Only a vertex with a neighbour on another region can have three regions in its ring:
+    // neighbour lists for those alone (a mesh of millions of vertices has few).
+    let n = pos.len().min(label.len());
+    let edges = || {
+        faces
+            .iter()
+            .flat_map(|f| (0..3).map(move |k| (f[k] as usize, f[(k + 1) % 3] as usize)))
+    };
+    let mut slot: Vec<u32> = vec![u32::MAX; n];
+    let mut nbr: Vec<Vec<u32>> = Vec::new();
+    for (a, b) in edges() {
+        if a < n && b < n && label[a] != label[b] {
+            for v in [a, b] {
+                if slot[v] == u32::MAX {
+                    slot[v] = nbr.len() as u32;
+                    nbr.push(Vec::new());
+                }
             }
         }
     }
-    let found: Vec<Option<RingCorner>> = (0..pos.len())
+    // Both directions of every edge: a boundary's or a badly oriented mesh's rings too.
+    for (a, b) in edges() {
+        if a < n && b < n {
+            for (v, w) in [(a, b), (b, a)] {
+                if let Some(l) = nbr.get_mut(slot[v] as usize) {
+                    if !l.contains(&(w as u32)) {
+                        l.push(w as u32);
+                    }
+                }
+            }
+        }
+    }
+    let ring = |v: usize| nbr.get(slot[v] as usize).map_or(&[][..], |l| &l[..]);
+    let found: Vec<Option<RingCorner>> = (0..n)
         .into_par_iter()
         .map(|v| {
-            let regions = ring_regions(v, &nbr[v], label)?;
-            let reach = nbr[v]
+            let regions = ring_regions(v, ring(v), label)?;
+            let reach = ring(v)
                 .iter()
                 .map(|&w| (pos[w as usize] - pos[v]).norm())
                 .fold(0.0, f64::max);
