@@ -148,6 +148,27 @@ mod tests {
     }
 
     #[test]
+    fn a_corner_beyond_the_ring_s_longest_edge_is_refused() {
+        // A ring 0.094 across whose regions meet 0.15 from its vertex: Newton reaches the
+        // corner (its steps may be twice the ring), but it belongs to another ring.
+        let pos = vec![
+            Point3::new(0.9, 0.9, 0.95),
+            Point3::new(0.98, 0.9, 0.9),
+            Point3::new(0.85, 0.85, 0.98),
+            Point3::new(0.9, 0.98, 0.9),
+        ];
+        let faces = vec![[0, 1, 2], [0, 2, 3]];
+        let l = labels(&pos);
+        let opts = CreaseSplitOptions::default();
+        assert!(ring_corners(&pos, &faces, &l, &Cube, &opts, &[]).is_empty());
+        // The same ring twice as wide reaches it.
+        let wide: Vec<Point3<f64>> = pos.iter().map(|p| pos[0] + (p - pos[0]) * 2.0).collect();
+        let l = labels(&wide);
+        let c = ring_corners(&wide, &faces, &l, &Cube, &opts, &[]);
+        assert_eq!(c.len(), 1, "{c:?}");
+    }
+
+    #[test]
     fn a_known_corner_or_two_regions_give_none() {
         let (pos, faces) = fan(Point3::new(0.95, 0.95, 0.97));
         let l = labels(&pos);
