@@ -13,10 +13,10 @@
 //! doc), and kept when it lies within the ring's longest edge of `v`. Rings of one corner give
 //! one corner: a candidate within the larger of the two reaches of one kept before with the
 //! same regions, or of a corner of a triangle (of any regions), is dropped. Vertices are
-//! visited in index order, so the result does not depend on the thread count. The corners are then snapped like those the fold guard dropped
-//! ([`super::corner_snap`]).
+//! visited in index order, so the result does not depend on the thread count. The corners are
+//! then snapped like those the fold guard dropped ([`super::corner_snap`]).
 
-use super::crease_split::{meet_point, CreaseSplitOptions, SideField};
+use super::crease_split::{crossing_edges, meet_point, CreaseSplitOptions, SideField};
 use nalgebra::Point3;
 use rayon::prelude::*;
 
@@ -43,13 +43,11 @@ pub fn ring_corners(
     };
     let mut slot: Vec<u32> = vec![u32::MAX; n];
     let mut nbr: Vec<Vec<u32>> = Vec::new();
-    for (a, b) in edges() {
-        if a < n && b < n && label[a] != label[b] {
-            for v in [a, b] {
-                if slot[v] == u32::MAX {
-                    slot[v] = nbr.len() as u32;
-                    nbr.push(Vec::new());
-                }
+    for (a, b) in crossing_edges(faces, label, n) {
+        for v in [a as usize, b as usize] {
+            if slot[v] == u32::MAX {
+                slot[v] = nbr.len() as u32;
+                nbr.push(Vec::new());
             }
         }
     }

@@ -24,14 +24,14 @@ pub(super) fn fit_side(
 ) -> Option<HeightPoly> {
     let frame = side_frame(p, n, scale, min_normal_cos)?;
     let plane = HeightPoly::fit(p, frame, Degree::Linear).ok()?;
-    if p.iter().all(|x| plane.value(x).abs() <= flat) {
+    let pr: Vec<f64> = p.iter().map(|x| plane.value(x).abs()).collect();
+    if pr.iter().all(|&r| r <= flat) {
         return Some(plane);
     }
     // Points far off the side's plane are the other face's, labelled as this side's beside
     // the crease: they are left out before the degree is chosen, or the quadratic bends to
     // them (make_parts' block from its cloud: three points of its chamfer in the top face's
     // group bent the top side 0.2 mm down at the chamfer).
-    let pr: Vec<f64> = p.iter().map(|x| plane.value(x).abs()).collect();
     let pcut = (3.0 * median(pr.iter().copied())).max(flat);
     let near = within(p, &pr, pcut);
     // Not when that leaves too few points for the quadratic a curved side needs (as for the
