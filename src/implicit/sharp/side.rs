@@ -13,8 +13,8 @@ const QUADRATIC_FROM: usize = 9;
 /// quadratic does not follow the points significantly better ([`plane_suffices`]), else a
 /// quadratic (from [`QUADRATIC_FROM`] points), chosen for the points within three median
 /// residuals of the side's plane; fitted, then fitted again without the points farther than
-/// three times the median residual (a few points of the other face given to this region beside
-/// the crease tilt it otherwise), the degree chosen again.
+/// three times the median residual and than `flat` (a few points of the other face given to
+/// this region beside the crease tilt it otherwise), the degree chosen again.
 pub(super) fn fit_side(
     p: &[Point3<f64>],
     n: &[Vector3<f64>],
@@ -42,7 +42,7 @@ pub(super) fn fit_side(
     let p: &[Point3<f64>] = if enough { &near } else { p };
     let first = side_poly(p, frame, flat)?;
     let r: Vec<f64> = p.iter().map(|x| first.value(x).abs()).collect();
-    let cut = 3.0 * median(r.iter().copied());
+    let cut = (3.0 * median(r.iter().copied())).max(flat);
     let kept = within(p, &r, cut);
     if kept.len() == p.len() || kept.len() < MIN_SIDE {
         return Some(first);
@@ -55,7 +55,7 @@ pub(super) fn fit_side(
     // curved strip (nine points on a cylinder of radius 7 over 35 degrees, one of them cut)
     // misses it by a third of a millimetre, while a flat side rid of the other face's point
     // is exact.
-    if p.len() >= QUADRATIC_FROM && kept.len() < QUADRATIC_FROM {
+    if first.degree == Degree::Quadratic && kept.len() < QUADRATIC_FROM {
         let worst = |h: &HeightPoly| kept.iter().map(|x| h.value(x).abs()).fold(0.0, f64::max);
         if worst(&second) > worst(&first) {
             return Some(first);
@@ -90,15 +90,50 @@ fn side_poly(p: &[Point3<f64>], frame: Frame, flat: f64) -> Option<HeightPoly> {
     })
 }
 
-/// F statistic under which a side's plane is kept over its quadratic ([`plane_suffices`]):
-/// about the 1 % point of F(3, 30).
-const PLANE_F: f64 = 4.5;
+/// The 1 % point of F(3, dof), for dof = 1 to 30 (the F distribution's quantile, as tabulated
+/// by `scipy.stats.f.ppf(0.99, 3, dof)`).
+const F3_1PCT: [f64; 30] = [
+    5403.35, 99.17, 29.46, 16.69, 12.06, 9.78, 8.45, 7.59, 6.99, 6.55, 6.22, 5.95, 5.74, 5.56,
+    5.42, 5.29, 5.19, 5.09, 5.01, 4.94, 4.87, 4.82, 4.77, 4.72, 4.68, 4.64, 4.60, 4.57, 4.54, 4.51,
+];
+
+/// The 1 % point of F(3, dof) beyond the table: at 30, 40, 60, 120 and infinitely many degrees
+/// of freedom, interpolated linearly in 1/dof (the usual reading of an F table between its
+/// rows).
+const F3_1PCT_TAIL: [(f64, f64); 5] = [
+    (30.0, 4.51),
+    (40.0, 4.31),
+    (60.0, 4.13),
+    (120.0, 3.95),
+    (f64::INFINITY, 3.78),
+];
+
+/// The F statistic under which a side's plane is kept over its quadratic ([`plane_suffices`]):
+/// the 1 % point of F(3, dof). Few points need a large F to call the quadratic's bend real: a
+/// plane's nine points (dof 3) need 29.5, thirty-six need 4.5.
+fn plane_f(dof: usize) -> f64 {
+    if dof == 0 {
+        return f64::INFINITY;
+    }
+    if let Some(f) = F3_1PCT.get(dof - 1) {
+        return *f;
+    }
+    let x = 1.0 / dof as f64;
+    F3_1PCT_TAIL
+        .windows(2)
+        .find(|w| dof as f64 <= w[1].0)
+        .map(|w| {
+            let (x0, x1) = (1.0 / w[0].0, 1.0 / w[1].0);
+            w[0].1 + (w[1].1 - w[0].1) * (x0 - x) / (x0 - x1)
+        })
+        .unwrap_or(3.78)
+}
 
 /// True when the quadratic's three extra terms do not explain significantly more of the points
 /// than the plane (the F test of nested least-squares models):
 ///
 /// ```text
-/// F = ((RSS_plane - RSS_quad) / 3) / (RSS_quad / (n - 6)) < PLANE_F
+/// F = ((RSS_plane - RSS_quad) / 3) / (RSS_quad / (n - 6)) < plane_f(n - 6)
 /// ```
 ///
 /// On a noisy cloud the points of a flat face scatter a tolerance or so (the tolerance is three
@@ -110,14 +145,13 @@ const PLANE_F: f64 = 4.5;
 fn plane_suffices(p: &[Point3<f64>], plane: &HeightPoly, quad: &HeightPoly) -> bool {
     let rss = |h: &HeightPoly| p.iter().map(|x| h.value(x).powi(2)).sum::<f64>();
     let (rp, rq) = (rss(plane), rss(quad));
-    let dof = p.len() as f64 - 6.0;
-    if dof < 1.0 {
+    let Some(dof) = p.len().checked_sub(6).filter(|&d| d >= 1) else {
         return true;
-    }
+    };
     if rq <= 0.0 {
         return rp <= 0.0;
     }
-    ((rp - rq) / 3.0) / (rq / dof) < PLANE_F
+    ((rp - rq) / 3.0) / (rq / dof as f64) < plane_f(dof)
 }
 
 /// The height frame of one side's points: along their mean normal, when every normal is within
@@ -210,6 +244,27 @@ mod tests {
     }
 
     #[test]
+    fn a_curved_side_keeps_its_points_off_its_plane_when_too_few_would_remain() {
+        // Ten points on a cylinder of radius 7 (axis x), eight in two rows within half a degree
+        // of the middle line and two 10 degrees out between them (a mesh's staggered strip): the two are beyond three median residuals
+        // of the side's plane, and setting them aside would leave eight, too few for the
+        // quadratic the side needs (the plane through the eight misses them by 0.1).
+        let r = 7.0;
+        let row = |x: f64, d: &'static [f64]| d.iter().map(move |d| (x, d.to_radians()));
+        let (p, n): (Vec<_>, Vec<_>) = row(0.0, &[-0.4, -0.15, 0.15, 0.4])
+            .chain(row(0.375, &[-10.0, 10.0]))
+            .chain(row(0.75, &[-0.4, -0.15, 0.15, 0.4]))
+            .map(|(x, a)| {
+                let m = Vector3::new(0.0, a.sin(), a.cos());
+                (Point3::new(x, 0.0, 0.0) + m * r, m)
+            })
+            .unzip();
+        let h = fit_side(&p, &n, 2.4, 0.3, 0.001).unwrap();
+        let worst = p.iter().map(|x| h.value(x).abs()).fold(0.0, f64::max);
+        assert!(worst < 0.003, "{worst} {:?}", h.degree);
+    }
+
+    #[test]
     fn a_flat_side_of_nine_points_drops_the_other_face_s_point() {
         // Nine points of the plane z = 0 in two rows (as above, flattened), one of them
         // 0.05 off it (a point of the other face given this region): the second fit, on the
@@ -219,6 +274,17 @@ mod tests {
         let h = fit_side(&p, &n, 2.4, 0.3, 0.01).unwrap();
         let worst = worst_but(&h, &p, 2);
         assert!(worst < 1e-9, "{worst}");
+    }
+
+    #[test]
+    fn the_plane_s_f_threshold_is_the_one_percent_point_of_f_3_dof() {
+        assert_eq!(plane_f(3), 29.46);
+        assert_eq!(plane_f(30), 4.51);
+        assert!((plane_f(48) - 4.22).abs() < 0.01, "{}", plane_f(48));
+        assert!((plane_f(1000) - 3.80).abs() < 0.01, "{}", plane_f(1000));
+        let f: Vec<f64> = (1..2000).map(plane_f).collect();
+        assert!(f.windows(2).all(|w| w[1] <= w[0]));
+        assert!(plane_f(usize::MAX) >= 3.78 && plane_f(0).is_infinite());
     }
 
     /// A 6 x 6 grid over [-1, 1]^2 placed by `at(u, v, e)`, `e` a deterministic noise in
