@@ -26,6 +26,7 @@
 //! [`SharpFunction::side_value_and_gradient`] evaluates one side alone (the crease's two
 //! surfaces for the net and patch stages, Newton on f_a = f_b = 0).
 
+mod relabel;
 mod side;
 
 use super::poly::HeightPoly;
@@ -211,8 +212,24 @@ impl SharpFunction {
     /// extended past the crease stays where the face is; a quadratic bends away from it).
     /// `None` unless two or three regions hold at least [`MIN_SIDE`] points each and every side
     /// can be fitted (not yet assessed against the tolerance: the caller does that, over all
-    /// the points).
+    /// the points). Points that another side fits and their own does not are given that side's
+    /// region and the sides fitted again (module `relabel`).
     pub fn fit(
+        points: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        labels: &[u32],
+        scale: f64,
+        min_normal_cos: f64,
+        flat: f64,
+    ) -> Option<SharpFunction> {
+        let first = Self::fit_labelled(points, normals, labels, scale, min_normal_cos, flat)?;
+        relabel::refit(first, points, labels, flat, |l| {
+            Self::fit_labelled(points, normals, l, scale, min_normal_cos, flat)
+        })
+    }
+
+    /// [`Self::fit`] from the labels as they are.
+    fn fit_labelled(
         points: &[Point3<f64>],
         normals: &[Vector3<f64>],
         labels: &[u32],
