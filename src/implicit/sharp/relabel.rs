@@ -101,8 +101,8 @@ mod tests {
         // A convex edge along z, the solid x <= 0, y <= 0: face x = 0 (region 0) over y < 0,
         // 1.5 wide, and a narrow face y = 0 (region 1) over x < 0, 0.5 wide, points 0.1 apart.
         // Face 0's points up to 0.4 from the edge carry region 1 (their normals estimated
-        // across the narrow face): side 1's plane through its own and them is tilted 40
-        // degrees, too many of them for its residual cut.
+        // across the narrow face), too many for side 1's residual cut: fitted once, the sharp
+        // function misses the points by up to 0.5 and takes the edge for concave.
         let (mut p, mut n, mut l) = (Vec::new(), Vec::new(), Vec::new());
         for i in 1..=15 {
             for j in 0..6 {
