@@ -224,20 +224,10 @@ mod tests {
         // Nine points on a cylinder of radius 7 in two rows, seven near the middle line (a
         // mesh's samples cluster) and two 8 degrees out: the plane's residuals are uneven, and
         // none of the side's own points may be cut from it before its degree is chosen.
-        let r = 7.0;
-        let row = |x: f64, d: &[f64]| {
-            d.iter()
-                .map(move |d| (x, d.to_radians()))
-                .collect::<Vec<_>>()
-        };
-        let (p, n): (Vec<_>, Vec<_>) = row(0.0, &[-8.0, -0.3, -0.1, 0.1, 0.3, 8.0])
-            .into_iter()
-            .chain(row(0.75, &[-0.4, 0.0, 0.4]))
-            .map(|(x, a)| {
-                let m = Vector3::new(0.0, a.sin(), a.cos());
-                (Point3::new(x, 0.0, 0.0) + m * r, m)
-            })
-            .unzip();
+        let (p, n) = cylinder_rows(&[
+            (0.0, &[-8.0, -0.3, -0.1, 0.1, 0.3, 8.0]),
+            (0.75, &[-0.4, 0.0, 0.4]),
+        ]);
         let h = fit_side(&p, &n, 2.4, 0.3, 0.001).unwrap();
         let worst = p.iter().map(|x| h.value(x).abs()).fold(0.0, f64::max);
         assert!(worst < 0.003, "{worst} {:?}", h.degree);
@@ -246,19 +236,15 @@ mod tests {
     #[test]
     fn a_curved_side_keeps_its_points_off_its_plane_when_too_few_would_remain() {
         // Ten points on a cylinder of radius 7 (axis x), eight in two rows within half a degree
-        // of the middle line and two 10 degrees out between them (a mesh's staggered strip): the two are beyond three median residuals
-        // of the side's plane, and setting them aside would leave eight, too few for the
-        // quadratic the side needs (the plane through the eight misses them by 0.1).
-        let r = 7.0;
-        let row = |x: f64, d: &'static [f64]| d.iter().map(move |d| (x, d.to_radians()));
-        let (p, n): (Vec<_>, Vec<_>) = row(0.0, &[-0.4, -0.15, 0.15, 0.4])
-            .chain(row(0.375, &[-10.0, 10.0]))
-            .chain(row(0.75, &[-0.4, -0.15, 0.15, 0.4]))
-            .map(|(x, a)| {
-                let m = Vector3::new(0.0, a.sin(), a.cos());
-                (Point3::new(x, 0.0, 0.0) + m * r, m)
-            })
-            .unzip();
+        // of the middle line and two 10 degrees out between them (a mesh's staggered strip):
+        // the two are beyond three median residuals of the side's plane, and setting them
+        // aside would leave eight, too few for the quadratic the side needs (the plane through
+        // the eight misses them by 0.1).
+        let (p, n) = cylinder_rows(&[
+            (0.0, &[-0.4, -0.15, 0.15, 0.4]),
+            (0.375, &[-10.0, 10.0]),
+            (0.75, &[-0.4, -0.15, 0.15, 0.4]),
+        ]);
         let h = fit_side(&p, &n, 2.4, 0.3, 0.001).unwrap();
         let worst = p.iter().map(|x| h.value(x).abs()).fold(0.0, f64::max);
         assert!(worst < 0.003, "{worst} {:?}", h.degree);
@@ -359,6 +345,18 @@ mod tests {
         assert_eq!(h.degree, Degree::Quadratic);
         let worst = p.iter().map(|x| h.value(x).abs()).fold(0.0, f64::max);
         assert!(worst < 0.003, "{worst}");
+    }
+
+    /// Points on the cylinder of radius 7 about the x axis with their normals: rows at x, each
+    /// at the given angles (degrees) from the top line (z = 7).
+    fn cylinder_rows(rows: &[(f64, &[f64])]) -> (Vec<Point3<f64>>, Vec<Vector3<f64>>) {
+        rows.iter()
+            .flat_map(|&(x, d)| d.iter().map(move |d| (x, d.to_radians())))
+            .map(|(x, a)| {
+                let m = Vector3::new(0.0, a.sin(), a.cos());
+                (Point3::new(x, 0.0, 0.0) + m * 7.0, m)
+            })
+            .unzip()
     }
 
     /// Nine points in two rows, five at x = 0 and four at x = 0.75, placed by `at(x, t)`
