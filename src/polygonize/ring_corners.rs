@@ -36,11 +36,6 @@ pub fn ring_corners(
     // Only a vertex with a neighbour on another region can have three regions in its ring:
     // neighbour lists for those alone (a mesh of millions of vertices has few).
     let n = pos.len().min(label.len());
-    let edges = || {
-        faces
-            .iter()
-            .flat_map(|f| (0..3).map(move |k| (f[k] as usize, f[(k + 1) % 3] as usize)))
-    };
     let mut slot: Vec<u32> = vec![u32::MAX; n];
     let mut nbr: Vec<Vec<u32>> = Vec::new();
     for (a, b) in crossing_edges(faces, label, n) {
@@ -52,7 +47,10 @@ pub fn ring_corners(
         }
     }
     // Both directions of every edge: a boundary's or a badly oriented mesh's rings too.
-    for (a, b) in edges() {
+    let edges = faces
+        .iter()
+        .flat_map(|f| (0..3).map(move |k| (f[k] as usize, f[(k + 1) % 3] as usize)));
+    for (a, b) in edges {
         if a < n && b < n {
             for (v, w) in [(a, b), (b, a)] {
                 if let Some(l) = nbr.get_mut(slot[v] as usize) {

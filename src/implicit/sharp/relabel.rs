@@ -27,13 +27,13 @@ use nalgebra::Point3;
 const ROUNDS: usize = 3;
 
 /// The fit of `first` improved by relabelling (module doc), for up to [`ROUNDS`] rounds while
-/// labels change and the fit improves; `refit` fits a sharp function from new labels.
+/// labels change and the fit improves; `fit` fits a sharp function from new labels.
 pub(super) fn refit(
     first: SharpFunction,
     points: &[Point3<f64>],
     labels: &[u32],
     flat: f64,
-    refit: impl Fn(&[u32]) -> Option<SharpFunction>,
+    fit: impl Fn(&[u32]) -> Option<SharpFunction>,
 ) -> Option<SharpFunction> {
     let rss = |f: &SharpFunction| points.iter().map(|x| f.value(x).powi(2)).sum::<f64>();
     let mut best = (rss(&first), first);
@@ -42,7 +42,7 @@ pub(super) fn refit(
         let Some(new) = relabelled(&best.1, points, &labels, 2.0 * flat) else {
             break;
         };
-        let Some(next) = refit(&new) else {
+        let Some(next) = fit(&new) else {
             break;
         };
         let r = rss(&next);

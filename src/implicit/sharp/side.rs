@@ -39,15 +39,24 @@ pub(super) fn fit_side(
     // distance 8.4e-4 of the diagonal at its end face's rim with the cut made, 7.0e-4 without).
     let enough =
         near.len() >= QUADRATIC_FROM || (p.len() < QUADRATIC_FROM && near.len() >= MIN_SIDE);
+    // The plane through the points fitted again only when some were set aside.
+    let plane = if enough && near.len() < p.len() {
+        HeightPoly::fit(&near, frame, Degree::Linear).ok()?
+    } else {
+        plane
+    };
     let p: &[Point3<f64>] = if enough { &near } else { p };
-    let first = side_poly(p, frame, flat)?;
+    let first = side_poly(p, plane, flat)?;
     let r: Vec<f64> = p.iter().map(|x| first.value(x).abs()).collect();
     let cut = (3.0 * median(r.iter().copied())).max(flat);
     let kept = within(p, &r, cut);
     if kept.len() == p.len() || kept.len() < MIN_SIDE {
         return Some(first);
     }
-    let Some(second) = side_poly(&kept, frame, flat) else {
+    let Some(second) = HeightPoly::fit(&kept, frame, Degree::Linear)
+        .ok()
+        .and_then(|plane| side_poly(&kept, plane, flat))
+    else {
         return Some(first);
     };
     // A second fit of a lower degree because too few points are left for a quadratic is kept
@@ -73,10 +82,10 @@ fn within(p: &[Point3<f64>], r: &[f64], cut: f64) -> Vec<Point3<f64>> {
         .collect()
 }
 
-/// The plane through `p` when it is flat within `flat`, when there are too few points for a
-/// quadratic, or when [`plane_suffices`]; else the quadratic.
-fn side_poly(p: &[Point3<f64>], frame: Frame, flat: f64) -> Option<HeightPoly> {
-    let plane = HeightPoly::fit(p, frame, Degree::Linear).ok()?;
+/// `plane` (the plane through `p`) when it is flat within `flat`, when there are too few
+/// points for a quadratic, or when [`plane_suffices`]; else the quadratic in its frame.
+fn side_poly(p: &[Point3<f64>], plane: HeightPoly, flat: f64) -> Option<HeightPoly> {
+    let frame = plane.frame;
     if p.len() < QUADRATIC_FROM || p.iter().all(|x| plane.value(x).abs() <= flat) {
         return Some(plane);
     }
@@ -126,7 +135,7 @@ fn plane_f(dof: usize) -> f64 {
             let (x0, x1) = (1.0 / w[0].0, 1.0 / w[1].0);
             w[0].1 + (w[1].1 - w[0].1) * (x0 - x) / (x0 - x1)
         })
-        .unwrap_or(3.78)
+        .unwrap_or(F3_1PCT_TAIL[F3_1PCT_TAIL.len() - 1].1)
 }
 
 /// True when the quadratic's three extra terms do not explain significantly more of the points
