@@ -27,6 +27,7 @@
 //! surfaces for the net and patch stages, Newton on f_a = f_b = 0).
 
 mod relabel;
+mod shared;
 mod side;
 
 use super::poly::HeightPoly;
@@ -222,13 +223,17 @@ impl SharpFunction {
         min_normal_cos: f64,
         flat: f64,
     ) -> Option<SharpFunction> {
-        let first = Self::fit_labelled(points, normals, labels, scale, min_normal_cos, flat)?;
-        relabel::refit(first, points, labels, flat, |l| {
-            Self::fit_labelled(points, normals, l, scale, min_normal_cos, flat)
-        })
+        let first = Self::fit_labelled(points, normals, labels, scale, min_normal_cos, flat, &[])?;
+        let (f, labels) = relabel::refit(first, points, labels, flat, |l| {
+            Self::fit_labelled(points, normals, l, scale, min_normal_cos, flat, &[])
+        });
+        Some(shared::refit(f, points, normals, &labels, flat, |extra| {
+            Self::fit_labelled(points, normals, &labels, scale, min_normal_cos, flat, extra)
+        }))
     }
 
-    /// [`Self::fit`] from the labels as they are.
+    /// [`Self::fit`] from the labels as they are, each side also fitted to the points `extra`
+    /// gives it (region, index into `points`: crease points shared, module `shared`).
     fn fit_labelled(
         points: &[Point3<f64>],
         normals: &[Vector3<f64>],
@@ -236,6 +241,7 @@ impl SharpFunction {
         scale: f64,
         min_normal_cos: f64,
         flat: f64,
+        extra: &[(u32, usize)],
     ) -> Option<SharpFunction> {
         let groups = region_groups(labels, MIN_SIDE);
         if !(2..=MAX_SIDES).contains(&groups.len()) {
@@ -243,7 +249,8 @@ impl SharpFunction {
         }
         let mut sides = Vec::with_capacity(groups.len());
         let mut members = Vec::with_capacity(groups.len());
-        for (region, idx) in groups {
+        for (region, mut idx) in groups {
+            idx.extend(extra.iter().filter(|e| e.0 == region).map(|e| e.1));
             let p: Vec<Point3<f64>> = idx.iter().map(|&i| points[i]).collect();
             let n: Vec<Vector3<f64>> = idx.iter().map(|&i| normals[i]).collect();
             let poly = fit_side(&p, &n, scale, min_normal_cos, flat)?;

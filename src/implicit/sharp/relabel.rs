@@ -27,14 +27,15 @@ use nalgebra::Point3;
 const ROUNDS: usize = 3;
 
 /// The fit of `first` improved by relabelling (module doc), for up to [`ROUNDS`] rounds while
-/// labels change and the fit improves; `fit` fits a sharp function from new labels.
+/// labels change and the fit improves; `fit` fits a sharp function from new labels. Returns
+/// the fit and the labels it was fitted from.
 pub(super) fn refit(
     first: SharpFunction,
     points: &[Point3<f64>],
     labels: &[u32],
     flat: f64,
     fit: impl Fn(&[u32]) -> Option<SharpFunction>,
-) -> Option<SharpFunction> {
+) -> (SharpFunction, Vec<u32>) {
     let rss = |f: &SharpFunction| points.iter().map(|x| f.value(x).powi(2)).sum::<f64>();
     let mut best = (rss(&first), first);
     let mut labels = labels.to_vec();
@@ -52,7 +53,7 @@ pub(super) fn refit(
         best = (r, next);
         labels = new;
     }
-    Some(best.1)
+    (best.1, labels)
 }
 
 /// The labels with every point off its own side but near another given the nearest side's
@@ -119,7 +120,7 @@ mod tests {
         }
         let flat = 0.005;
         let worst = |f: &SharpFunction| p.iter().map(|x| f.value(x).abs()).fold(0.0, f64::max);
-        let once = SharpFunction::fit_labelled(&p, &n, &l, 1.5, 0.3, flat).unwrap();
+        let once = SharpFunction::fit_labelled(&p, &n, &l, 1.5, 0.3, flat, &[]).unwrap();
         let f = SharpFunction::fit(&p, &n, &l, 1.5, 0.3, flat).unwrap();
         assert_eq!(f.combination().0, Combine::Max);
         assert!(worst(&f) < 1e-9, "{} (once: {})", worst(&f), worst(&once));
