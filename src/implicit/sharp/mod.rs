@@ -214,7 +214,8 @@ impl SharpFunction {
     /// `None` unless two or three regions hold at least [`MIN_SIDE`] points each and every side
     /// can be fitted (not yet assessed against the tolerance: the caller does that, over all
     /// the points). Points that another side fits and their own does not are given that side's
-    /// region and the sides fitted again (module `relabel`).
+    /// region and the sides fitted again (module `relabel`); then, at an edge, points on the
+    /// crease that the other side cuts into are given to that side too (module `shared`).
     pub fn fit(
         points: &[Point3<f64>],
         normals: &[Vector3<f64>],
