@@ -119,24 +119,26 @@ impl SharpFunction {
         (f, if j == 0 { 0 } else { 1 + k })
     }
 
-    /// F(x).
+    /// Each side's f_i(x), in the sides' order (the entries past the last side are 0).
     #[inline]
-    pub fn value(&self, x: &Point3<f64>) -> f64 {
+    fn side_values(&self, x: &Point3<f64>) -> [f64; MAX_SIDES] {
         let mut v = [0.0; MAX_SIDES];
         for (vi, s) in v.iter_mut().zip(&self.sides) {
             *vi = s.poly.value(x);
         }
-        self.pick(&v[..self.sides.len()]).0
+        v
+    }
+
+    /// F(x).
+    #[inline]
+    pub fn value(&self, x: &Point3<f64>) -> f64 {
+        self.pick(&self.side_values(x)[..self.sides.len()]).0
     }
 
     /// F(x) and the gradient of the active side.
     #[inline]
     pub fn value_and_gradient(&self, x: &Point3<f64>) -> (f64, Vector3<f64>) {
-        let mut v = [0.0; MAX_SIDES];
-        for (vi, s) in v.iter_mut().zip(&self.sides) {
-            *vi = s.poly.value(x);
-        }
-        let (_, k) = self.pick(&v[..self.sides.len()]);
+        let (_, k) = self.pick(&self.side_values(x)[..self.sides.len()]);
         self.sides[k].poly.value_and_gradient(x)
     }
 
@@ -224,13 +226,17 @@ impl SharpFunction {
         min_normal_cos: f64,
         flat: f64,
     ) -> Option<SharpFunction> {
-        let first = Self::fit_labelled(points, normals, labels, scale, min_normal_cos, flat, &[])?;
-        let (f, labels) = relabel::refit(first, points, labels, flat, |l| {
-            Self::fit_labelled(points, normals, l, scale, min_normal_cos, flat, &[])
-        });
-        Some(shared::refit(f, points, normals, &labels, flat, |extra| {
-            Self::fit_labelled(points, normals, &labels, scale, min_normal_cos, flat, extra)
-        }))
+        let fit = |l: &[u32], extra: &[(u32, usize)]| {
+            Self::fit_labelled(points, normals, l, scale, min_normal_cos, flat, extra)
+        };
+        let first = fit(labels, &[])?;
+        let (best, labels) = relabel::refit(first, points, labels, flat, |l| fit(l, &[]));
+        Some(
+            shared::refit(best, points, normals, &labels, flat, |extra| {
+                fit(&labels, extra)
+            })
+            .1,
+        )
     }
 
     /// [`Self::fit`] from the labels as they are, each side also fitted to the points `extra`
@@ -342,6 +348,39 @@ fn corner_structure(
         }
     }
     best.0
+}
+
+/// A fit and its sum of F(x)^2 over `points`, the measure by which the refits of modules
+/// `relabel` and `shared` are kept.
+type Scored = (f64, SharpFunction);
+
+/// `f` with its sum of F(x)^2 over `points`.
+fn scored(f: SharpFunction, points: &[Point3<f64>]) -> Scored {
+    (points.iter().map(|x| f.value(x).powi(2)).sum(), f)
+}
+
+/// Up to `rounds` refits of `best`: `step` gives the next state (labels, shared points) and the
+/// function fitted from it, or `None` to stop; a refit is kept, with its state, while its sum
+/// of F(x)^2 over `points` drops, and the first that does not ends the rounds.
+fn improve<S>(
+    mut best: Scored,
+    mut state: S,
+    points: &[Point3<f64>],
+    rounds: usize,
+    mut step: impl FnMut(&SharpFunction, &S) -> Option<(S, SharpFunction)>,
+) -> (Scored, S) {
+    for _ in 0..rounds {
+        let Some((next_state, next)) = step(&best.1, &state) else {
+            break;
+        };
+        let next = scored(next, points);
+        if next.0 >= best.0 {
+            break;
+        }
+        best = next;
+        state = next_state;
+    }
+    (best, state)
 }
 
 /// Regions with at least `min` of `labels`, with the indices of their points, largest first

@@ -20,7 +20,7 @@
 //! label at the far edge of its 0.76 mm strip: the top's quadratic bends 0.07 over the
 //! chamfer).
 
-use super::{SharpFunction, MAX_SIDES};
+use super::{improve, scored, Scored, SharpFunction};
 use nalgebra::Point3;
 
 /// Most relabelling rounds.
@@ -28,32 +28,25 @@ const ROUNDS: usize = 3;
 
 /// The fit of `first` improved by relabelling (module doc), for up to [`ROUNDS`] rounds while
 /// labels change and the fit improves; `fit` fits a sharp function from new labels. Returns
-/// the fit and the labels it was fitted from.
+/// the fit, with its sum of F(x)^2 over `points`, and the labels it was fitted from.
 pub(super) fn refit(
     first: SharpFunction,
     points: &[Point3<f64>],
     labels: &[u32],
     flat: f64,
     fit: impl Fn(&[u32]) -> Option<SharpFunction>,
-) -> (SharpFunction, Vec<u32>) {
-    let rss = |f: &SharpFunction| points.iter().map(|x| f.value(x).powi(2)).sum::<f64>();
-    let mut best = (rss(&first), first);
-    let mut labels = labels.to_vec();
-    for _ in 0..ROUNDS {
-        let Some(new) = relabelled(&best.1, points, &labels, 2.0 * flat) else {
-            break;
-        };
-        let Some(next) = fit(&new) else {
-            break;
-        };
-        let r = rss(&next);
-        if r >= best.0 {
-            break;
-        }
-        best = (r, next);
-        labels = new;
-    }
-    (best.1, labels)
+) -> (Scored, Vec<u32>) {
+    improve(
+        scored(first, points),
+        labels.to_vec(),
+        points,
+        ROUNDS,
+        |f, labels| {
+            let new = relabelled(f, points, labels, 2.0 * flat)?;
+            let next = fit(&new)?;
+            Some((new, next))
+        },
+    )
 }
 
 /// The labels with every point off its own side but near another given the nearest side's
@@ -70,10 +63,8 @@ fn relabelled(
         let Some(own) = f.sides.iter().position(|s| s.region == *l) else {
             continue;
         };
-        let mut v = [f64::INFINITY; MAX_SIDES];
-        for (vi, s) in v.iter_mut().zip(&f.sides) {
-            *vi = s.poly.value(x).abs();
-        }
+        let v = f.side_values(x).map(f64::abs);
+        let v = &v[..f.sides.len()];
         if v[own] <= near {
             continue;
         }

@@ -25,7 +25,7 @@
 //! (five on make_parts' bracket from its cloud), and the points shared with it outweigh them
 //! (its corner 4.3e-4 -> 9.6e-4 of the diagonal off).
 
-use super::SharpFunction;
+use super::{improve, Scored, SharpFunction};
 use nalgebra::{Point3, Vector3};
 
 /// Most rounds of sharing.
@@ -35,42 +35,34 @@ const ROUNDS: usize = 3;
 /// face's, not the crease's, and is not shared.
 const OWN_NORMAL_COS: f64 = 0.966;
 
-/// The fit of `first` (from `labels`) with crease points shared (module doc); `fit` fits a
-/// sharp function with the given (region, point index) pairs added to the sides.
+/// The fit `first` (from `labels`, with its sum of F(x)^2 over `points`) with crease points
+/// shared (module doc); `fit` fits a sharp function with the given (region, point index) pairs
+/// added to the sides.
 pub(super) fn refit(
-    first: SharpFunction,
+    first: Scored,
     points: &[Point3<f64>],
     normals: &[Vector3<f64>],
     labels: &[u32],
     flat: f64,
     fit: impl Fn(&[(u32, usize)]) -> Option<SharpFunction>,
-) -> SharpFunction {
-    if first.sides.len() > 2 {
+) -> Scored {
+    if first.1.sides.len() > 2 {
         return first;
     }
-    let rss = |f: &SharpFunction| points.iter().map(|x| f.value(x).powi(2)).sum::<f64>();
-    let mut best = (rss(&first), first);
-    let mut extra: Vec<(u32, usize)> = Vec::new();
-    for _ in 0..ROUNDS {
-        let before = extra.len();
-        for e in cut_in(&best.1, points, normals, labels, 2.0 * flat) {
-            if !extra.contains(&e) {
-                extra.push(e);
+    let step = |f: &SharpFunction, extra: &Vec<(u32, usize)>| {
+        let mut more = extra.clone();
+        for e in cut_in(f, points, normals, labels, 2.0 * flat) {
+            if !more.contains(&e) {
+                more.push(e);
             }
         }
-        if extra.len() == before {
-            break;
+        if more.len() == extra.len() {
+            return None;
         }
-        let Some(next) = fit(&extra) else {
-            break;
-        };
-        let r = rss(&next);
-        if r >= best.0 {
-            break;
-        }
-        best = (r, next);
-    }
-    best.1
+        let next = fit(&more)?;
+        Some((more, next))
+    };
+    improve(first, Vec::new(), points, ROUNDS, step).0
 }
 
 /// (region of the side that gives F, point index) for every point on the crease (its normal
@@ -83,14 +75,11 @@ fn cut_in(
     near: f64,
 ) -> Vec<(u32, usize)> {
     let mut out = Vec::new();
-    let mut v = [0.0; super::MAX_SIDES];
     for (i, ((x, n), l)) in points.iter().zip(normals).zip(labels).enumerate() {
         let Some(own) = f.sides.iter().position(|s| s.region == *l) else {
             continue;
         };
-        for (vi, s) in v.iter_mut().zip(&f.sides) {
-            *vi = s.poly.value(x);
-        }
+        let v = f.side_values(x);
         let (value, k) = f.pick(&v[..f.sides.len()]);
         if k == own || v[own].abs() > near || value.abs() <= near {
             continue;
@@ -155,10 +144,16 @@ mod tests {
         let (once, labels) = super::super::relabel::refit(fit(&[]).unwrap(), &p, &l, flat, |l| {
             SharpFunction::fit_labelled(&p, &n, l, h, 0.3, flat, &[])
         });
+        let once = once.1;
         assert!(worst(&once) > 4.0 * tol, "{}", worst(&once));
-        let f = refit(once.clone(), &p, &n, &labels, flat, |extra| {
-            SharpFunction::fit_labelled(&p, &n, &labels, h, 0.3, flat, extra)
-        });
+        let (_, f) = refit(
+            super::super::scored(once.clone(), &p),
+            &p,
+            &n,
+            &labels,
+            flat,
+            |extra| SharpFunction::fit_labelled(&p, &n, &labels, h, 0.3, flat, extra),
+        );
         assert!(
             worst(&f) < 2.0 * tol,
             "{} (once: {})",
