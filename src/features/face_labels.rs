@@ -264,5 +264,57 @@ mod segmentation_tests {
         let seg = segment(&mesh, &op, &opts(false)).unwrap();
         let (_, n) = seg.labels_and_normals(&op.points, &op.normals);
         assert!(!n.iter().all(axis_aligned));
+        // A mesh's crease cells are judged by those normals too.
+        assert_eq!(seg.side_normals(&op.points, &op.normals), n.into_owned());
+    }
+
+    #[test]
+    fn a_box_cloud_s_points_beside_its_edges_get_their_own_face_s_normal() {
+        // Points every 0.05 on the faces of the box [-1, 1]^3, no normals: PCA normals
+        // (12 neighbours) beside an edge lean toward the other face; one-sided ones do not.
+        let (mut pos, mut truth) = (Vec::new(), Vec::new());
+        let k = 40;
+        for axis in 0..3 {
+            for side in [-1.0, 1.0] {
+                for i in 0..k {
+                    for j in 0..k {
+                        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                        let mut x = nalgebra::Point3::origin();
+                        x[axis] = side;
+                        x[u] = -1.0 + 2.0 * (i as f64 + 0.5) / k as f64;
+                        x[v] = -1.0 + 2.0 * (j as f64 + 0.5) / k as f64;
+                        pos.push(x);
+                        truth.push(nalgebra::Vector3::ith(axis, side));
+                    }
+                }
+            }
+        }
+        let cloud = crate::mesh::Mesh {
+            positions: pos,
+            normals: None,
+            faces: Vec::new(),
+        };
+        let op = oriented_points(&cloud, 12).unwrap();
+        let seg = segment(&cloud, &op, &FeatureOptions::default()).unwrap();
+        assert_eq!(seg.regions.len(), 6);
+        let sides = seg.side_normals(&op.points, &op.normals);
+        let off = |n: &[nalgebra::Vector3<f64>]| {
+            op.points
+                .iter()
+                .zip(n)
+                .filter(|(p, m)| {
+                    let t = truth[pos_index(&cloud.positions, p)];
+                    m.dot(&t) < 10f64.to_radians().cos()
+                })
+                .count()
+        };
+        let (pca, one_sided) = (off(&op.normals), off(&sides));
+        assert!(pca > 100, "{pca}");
+        assert!(one_sided * 20 < pca, "one-sided {one_sided} PCA {pca}");
+    }
+
+    /// Index of `p` among `positions` (the oriented points keep the cloud's points).
+    fn pos_index(positions: &[nalgebra::Point3<f64>], p: &nalgebra::Point3<f64>) -> usize {
+        positions.iter().position(|q| q == p).unwrap_or(usize::MAX)
     }
 }

@@ -107,6 +107,8 @@ pub struct Segmentation {
     /// Labelled points (positions, region of each) and their tree.
     label_points: Vec<Point3<f64>>,
     label_of: Vec<u32>,
+    /// The one-sided unit normal of each labelled point (its region's alone), for a cloud.
+    label_normals: Option<Vec<Vector3<f64>>>,
     label_kd: KdTree,
     /// A mesh's triangles with their regions (`None` for a cloud).
     faces: Option<face_labels::FaceLabels>,
@@ -119,15 +121,20 @@ impl Segmentation {
     pub fn from_regions(regions: Vec<Region>, stats: SegmentStats) -> Result<Segmentation> {
         let mut label_points = Vec::new();
         let mut label_of = Vec::new();
+        let mut label_normals = Vec::new();
         for (r, reg) in regions.iter().enumerate() {
             label_points.extend(reg.points.iter().copied());
             label_of.extend(std::iter::repeat_n(r as u32, reg.points.len()));
+            label_normals.extend(
+                (0..reg.points.len()).map(|i| reg.normals.get(i).copied().unwrap_or_default()),
+            );
         }
         let label_kd = KdTree::build(&label_points)?;
         Ok(Segmentation {
             regions,
             label_points,
             label_of,
+            label_normals: Some(label_normals),
             label_kd,
             faces: None,
             stats,
@@ -202,6 +209,39 @@ impl Segmentation {
             }
             None => (self.labels_of(points), normals.into()),
         }
+    }
+
+    /// The normal of each of `points` from its own region alone, for judging a crease cell's
+    /// fit ([`crate::implicit::PouImplicit::fit_with_sides`]). For a cloud, that of the
+    /// labelled point nearest to it (the one [`Self::labels_of`] takes its region from): an
+    /// estimated normal beside a crease mixes both faces, and can be either face's or
+    /// neither's; the one-sided one is its own face's (segmentation step 5,
+    /// [`segment_cloud`]). A mesh's points keep `normals` (those of
+    /// [`Self::labels_and_normals`]): a vertex normal averages the faces around the vertex, so
+    /// it is never along a crease nor the other face's alone, and the nearest labelled point
+    /// (a vertex of either region, or a triangle's centre) can be the wrong region's
+    /// (make_parts-style slot plate from its mesh: a slot's rim 1.2e-3 of the diagonal off
+    /// with them, 3.8e-4 without).
+    pub fn side_normals(
+        &self,
+        points: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+    ) -> Vec<Vector3<f64>> {
+        let Some(label_normals) = &self.label_normals else {
+            return self.labels_and_normals(points, normals).1.into_owned();
+        };
+        points
+            .iter()
+            .zip(normals)
+            .map(|(p, n)| {
+                let m = label_normals[self.label_kd.nearest(p).0];
+                if m.norm_squared() > 0.0 {
+                    m
+                } else {
+                    *n
+                }
+            })
+            .collect()
     }
 
     /// True when there is more than one region (something for the feature-aware stages to do).
@@ -299,6 +339,7 @@ fn segment_points(op: &OrientedPoints, opts: &CloudOptions) -> Result<Segmentati
     let mut regions = vec![Region::default(); l.regions];
     let mut label_points = Vec::with_capacity(op.points.len());
     let mut label_of = Vec::with_capacity(op.points.len());
+    let mut label_normals = Vec::with_capacity(op.points.len());
     for (i, &r) in l.label.iter().enumerate() {
         if r == segment_cloud::NONE {
             continue;
@@ -307,6 +348,7 @@ fn segment_points(op: &OrientedPoints, opts: &CloudOptions) -> Result<Segmentati
         regions[r as usize].normals.push(l.normals[i]);
         label_points.push(op.points[i]);
         label_of.push(r);
+        label_normals.push(l.normals[i]);
     }
     if label_points.is_empty() {
         return Err(crate::Error::Degenerate(
@@ -326,6 +368,7 @@ fn segment_points(op: &OrientedPoints, opts: &CloudOptions) -> Result<Segmentati
         regions,
         label_points,
         label_of,
+        label_normals: Some(label_normals),
         label_kd,
         faces: None,
     })
@@ -395,11 +438,10 @@ fn segment_faces(mesh: &Mesh, op: &OrientedPoints, opts: &MeshOptions) -> Result
                 region.normals.push(vn[i]);
             }
         }
-        for (fi, f) in sub.faces.iter().enumerate() {
+        for f in &sub.faces {
             let c = f.map(|v| sub.positions[v as usize].coords);
             label_points.push(Point3::from((c[0] + c[1] + c[2]) / 3.0));
             label_of.push(r);
-            let _ = fi;
         }
         for (i, p) in sub.positions.iter().enumerate() {
             if used[i] {
@@ -427,6 +469,7 @@ fn segment_faces(mesh: &Mesh, op: &OrientedPoints, opts: &MeshOptions) -> Result
         regions,
         label_points,
         label_of,
+        label_normals: None,
         label_kd,
         faces,
     })

@@ -60,8 +60,10 @@ use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 
 mod build;
+mod density;
 mod sharp_cell;
 use build::Builder;
+use density::{density_probes, DensityProbes, DENSITY_FULL, DENSITY_RADIUS};
 
 /// Options of [`PouImplicit::fit`], with documented defaults.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -226,75 +228,6 @@ pub struct PouImplicit {
 /// face normal error p95 5.0 degrees with 1, 2.3 with 2, 1.3 with 3).
 const REGION_NOISE_FACTOR: f64 = 3.0;
 
-/// Radius of the data density that lets bridges take over (`PouImplicit::density`), in point
-/// spacings: beyond it from every point the bridges have full priority.
-const DENSITY_RADIUS: f64 = 3.0;
-
-/// Data density (`PouImplicit::density`) above which only the fitted cells count: on an even
-/// sampling about 1.5 spacings from the surface (7.07 (1 - d^2 / 9)^4 = 2 at d = 1.56).
-const DENSITY_FULL: f64 = 2.0;
-
-/// Points summed by `PouImplicit::dense` before the full density: the nearest ones to x, or
-/// to the centre of the octree cell holding x (near the surface three or four of them already
-/// reach `DENSITY_FULL`).
-const DENSE_PROBE: usize = 8;
-
-/// `PouImplicit::dense` answers yes only when its partial sum beats `DENSITY_FULL` by this
-/// relative margin, far above rounding, so the exact sum certainly reaches it too and `blend`
-/// gives bit-identical results whichever way it was decided.
-const DENSE_MARGIN: f64 = 1.0 + 1e-9;
-
-/// Base u = max(0, 1 - d^2 / R^2) of one point's term u^3 in the data density (`d^2` its squared
-/// distance, `r2` = R^2): one formula for `PouImplicit::density` and the partial sums of
-/// `PouImplicit::dense`, which must bound the same sum from below.
-#[inline]
-fn density_base(d2: f64, r2: f64) -> f64 {
-    (1.0 - d2 / r2).max(0.0)
-}
-
-/// The `DENSE_PROBE` points nearest to the centre of each terminal octree cell not much larger
-/// than the density radius `r` (larger cells get none: from most of such a cell the points
-/// nearest its centre are too far to count), for `PouImplicit::dense`.
-fn density_probes<T: Send>(tree: &Octree<T>, kd: &KdTree, r: f64) -> DensityProbes {
-    use rayon::prelude::*;
-    let cells: Vec<(usize, Cube)> = tree.terminal_nodes().collect();
-    let found: Vec<(usize, [u32; DENSE_PROBE])> = cells
-        .par_iter()
-        .filter(|(_, cube)| cube.size <= r)
-        .map(|(ni, cube)| {
-            let mut probe = [u32::MAX; DENSE_PROBE];
-            for (slot, (i, _)) in probe.iter_mut().zip(kd.knn(&cube.center(), DENSE_PROBE)) {
-                *slot = i as u32;
-            }
-            (*ni, probe)
-        })
-        .collect();
-    let mut slot = vec![u32::MAX; tree.node_count()];
-    let mut probes = Vec::with_capacity(found.len());
-    for (ni, probe) in found {
-        slot[ni] = probes.len() as u32;
-        probes.push(probe);
-    }
-    DensityProbes { slot, probes }
-}
-
-/// Per terminal octree cell, the `DENSE_PROBE` points nearest to its centre (`u32::MAX` where
-/// fewer exist): a slot per octree node (inner nodes and cells without probes: `u32::MAX`)
-/// into the probe sets of the cells that have them.
-#[derive(Debug)]
-struct DensityProbes {
-    slot: Vec<u32>,
-    probes: Vec<[u32; DENSE_PROBE]>,
-}
-
-impl DensityProbes {
-    /// The probe points of octree node `node`, if it has any.
-    fn of(&self, node: usize) -> Option<&[u32; DENSE_PROBE]> {
-        let k = *self.slot.get(node)?;
-        self.probes.get(k as usize)
-    }
-}
-
 /// Median over up to 2000 strided points of the distance to the 8th nearest neighbour divided by
 /// sqrt(8 / pi): the spacing of an even sampling with the same density.
 fn sample_spacing(points: &[Point3<f64>], kd: &KdTree) -> f64 {
@@ -355,6 +288,37 @@ impl PouImplicit {
         regions: Option<&[u32]>,
         opts: &FitOptions,
     ) -> Result<PouImplicit> {
+        Self::fit_labelled(points, normals, regions.map(|r| (r, normals)), opts)
+    }
+
+    /// [`Self::fit_with_regions`] with a second normal per point, of its own region alone
+    /// (`side_normals`, [`crate::features::Segmentation::side_normals`]): a crease cell's sharp
+    /// function is fitted with `normals`, and a point counts against it only when neither of
+    /// its normals agrees ([`super::sharp::SharpFunction::evaluate`]: an estimated normal
+    /// beside a crease can be the other face's or lie along the crease).
+    pub fn fit_with_sides(
+        points: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        regions: &[u32],
+        side_normals: &[Vector3<f64>],
+        opts: &FitOptions,
+    ) -> Result<PouImplicit> {
+        if side_normals.len() != points.len() {
+            return Err(Error::Degenerate(format!(
+                "{} points but {} one-sided normals",
+                points.len(),
+                side_normals.len()
+            )));
+        }
+        Self::fit_labelled(points, normals, Some((regions, side_normals)), opts)
+    }
+
+    fn fit_labelled(
+        points: &[Point3<f64>],
+        normals: &[Vector3<f64>],
+        regions: Option<(&[u32], &[Vector3<f64>])>,
+        opts: &FitOptions,
+    ) -> Result<PouImplicit> {
         opts.validate()?;
         if points.len() != normals.len() {
             return Err(Error::Degenerate(format!(
@@ -363,7 +327,7 @@ impl PouImplicit {
                 normals.len()
             )));
         }
-        if let Some(r) = regions {
+        if let Some((r, _)) = regions {
             if r.len() != points.len() {
                 return Err(Error::Degenerate(format!(
                     "{} points but {} region labels",
@@ -375,6 +339,7 @@ impl PouImplicit {
         let mut pts = Vec::with_capacity(points.len());
         let mut nrm = Vec::with_capacity(points.len());
         let mut labels = Vec::new();
+        let mut side_nrm = Vec::new();
         for (i, (p, n)) in points.iter().zip(normals).enumerate() {
             if !p.coords.iter().all(|c| c.is_finite()) {
                 return Err(Error::Degenerate("non-finite point coordinate".into()));
@@ -383,8 +348,9 @@ impl PouImplicit {
                 if u.iter().all(|c| c.is_finite()) {
                     pts.push(*p);
                     nrm.push(u);
-                    if let Some(r) = regions {
+                    if let Some((r, sn)) = regions {
                         labels.push(r[i]);
+                        side_nrm.push(sn[i].try_normalize(1e-300).unwrap_or(u));
                     }
                 }
             }
@@ -447,6 +413,7 @@ impl PouImplicit {
             spacing,
             root_half: 0.5 * root.size,
             labels: regions.map(|_| labels.as_slice()),
+            side_nrm: if regions.is_some() { &side_nrm } else { &nrm },
         };
         let tree = Octree::build(root, &pts, opts.max_depth, |c| builder.decide(c));
         let mut stats = FitStats {
@@ -605,59 +572,6 @@ impl PouImplicit {
             self.normals[i]
         };
         (s * d, g)
-    }
-
-    /// Smooth proximity of the data at `x`: a kernel density of the points within
-    /// `DENSITY_RADIUS` spacings, `rho(x) = sum_j (1 - |x - p_j|^2 / R^2)^3` (C2, zero where no
-    /// point is within R), and its gradient.
-    fn density(&self, x: &Point3<f64>, with_gradient: bool) -> (f64, Vector3<f64>) {
-        let r = DENSITY_RADIUS * self.spacing;
-        let r2 = r * r;
-        let mut rho = 0.0;
-        let mut g = Vector3::zeros();
-        // The points in the cube around the ball (the same terms in the same ascending order
-        // as a ball query: those beyond r have u <= 0; the Morton runs answer faster than
-        // the k-d tree, which was 4 % of `fit`).
-        for i in self.boxes.within_box(x, r) {
-            let v = x - self.points[i];
-            let u = density_base(v.norm_squared(), r2);
-            if u > 0.0 {
-                rho += u * u * u;
-                if with_gradient {
-                    g -= v * (6.0 * u * u / r2);
-                }
-            }
-        }
-        (rho, g)
-    }
-
-    /// True when the data density at `x` certainly reaches `DENSITY_FULL`: a partial sum of
-    /// rho over a few points already does (every term is non-negative), with `DENSE_MARGIN`.
-    /// Then the density ramp of `blend` is 0 with zero slope and the full sum, a radius query,
-    /// is not needed. The points tried are the probes of the octree cell holding x (`node`;
-    /// no query at all), the `DENSE_PROBE` points nearest to its centre; near the surface,
-    /// where `fit` evaluates, they nearly always decide.
-    fn dense(&self, x: &Point3<f64>, node: Option<usize>) -> bool {
-        let r = DENSITY_RADIUS * self.spacing;
-        let r2 = r * r;
-        let term = |i: usize| {
-            let u = density_base((x - self.points[i]).norm_squared(), r2);
-            u * u * u
-        };
-        let full = DENSITY_FULL * DENSE_MARGIN;
-        if let Some(probe) = node.and_then(|n| self.probes.of(n)) {
-            let rho: f64 = probe
-                .iter()
-                .filter(|&&i| i != u32::MAX)
-                .map(|&i| term(i as usize))
-                .sum();
-            if rho >= full {
-                return true;
-            }
-        }
-        // Otherwise the caller's full sum decides (a box query is cheaper than the k-d
-        // tree's nearest few, which cost 3.5 % of `fit` here).
-        false
     }
 
     /// F(x) and, when `with_gradient`, grad F(x) (seed 003 eq. 8 and its derivative).

@@ -191,7 +191,9 @@ impl Builder<'_> {
         else {
             return Attempt::Nothing;
         };
-        let (values, agreement) = f.evaluate(p, n, self.tol);
+        // Judged by the points' own and one-sided normals (`side_nrm`): either may agree.
+        let ns: Vec<Vector3<f64>> = idx.iter().map(|&i| self.side_nrm[i]).collect();
+        let (values, agreement) = f.evaluate(p, n, &ns, self.tol);
         let fit = LocalFit {
             normal_agreement: agreement,
             ..local::assess_values(LocalFunction::Sharp(f), &values, n)

@@ -473,3 +473,40 @@ fn assert_on_zero_set(f: &PouImplicit, points: impl IntoIterator<Item = Point3<f
         worst.1
     );
 }
+
+#[test]
+fn crease_cells_are_judged_by_one_sided_normals() {
+    // A cloud's estimated normal beside a crease can be the other face's (its neighbours
+    // mostly there). Points within 0.06 of the box's top edges at x = +-1 are given such
+    // normals, as `normals`; their faces' own are the `side_normals`, and either agreeing
+    // with a crease cell's function counts for it.
+    let (p, n, l) = box_points(20);
+    let near_edge = |x: &Point3<f64>| x.z > 0.44 && x.x.abs() > 0.94;
+    let spoiled: Vec<Vector3<f64>> = p
+        .iter()
+        .zip(&n)
+        .map(|(x, m)| match near_edge(x) {
+            true if m.z > 0.5 => Vector3::x() * x.x.signum(),
+            true => Vector3::z(),
+            false => *m,
+        })
+        .collect();
+    assert!(spoiled.iter().zip(&n).filter(|(a, b)| a != b).count() > 100);
+    let edges = || {
+        (0..=30).flat_map(|i| {
+            let t = -0.75 + 0.05 * i as f64;
+            [Point3::new(1.0, t, 0.5), Point3::new(-1.0, t, 0.5)]
+        })
+    };
+    let opts = FitOptions::default();
+    let judged = PouImplicit::fit_with_sides(&p, &spoiled, &l, &n, &opts).unwrap();
+    assert_on_zero_set(&judged, edges());
+    // Judged by the spoiled normals alone, the crease cells fail and smooth fits round the
+    // edges.
+    let plain = PouImplicit::fit_with_regions(&p, &spoiled, Some(&l), &opts).unwrap();
+    let tol = 2.0 * plain.stats().tolerance * plain.diagonal();
+    let worst = edges().map(|x| plain.value(&x).abs()).fold(0.0, f64::max);
+    assert!(worst > 2.0 * tol, "{worst} {tol}");
+    // One-sided normals must match the points.
+    assert!(PouImplicit::fit_with_sides(&p, &spoiled, &l, &n[1..], &opts).is_err());
+}
