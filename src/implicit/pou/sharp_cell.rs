@@ -187,12 +187,17 @@ impl Builder<'_> {
                 Attempt::Nothing
             };
         }
-        let Some(f) = SharpFunction::fit(p, n, &l, h, self.opts.min_normal_cos, 0.5 * self.tol)
-        else {
+        // Fitted with the points' own normals or, where those give some side no height frame
+        // (estimates scattered beside an acute crease: the V block's cloud where a hole meets
+        // a flank, 2.4e-3 -> 2.0e-3 of the diagonal), their one-sided ones (`side_nrm`), and
+        // judged by both: either may agree (`SharpFunction::evaluate`).
+        let ns: Vec<Vector3<f64>> = idx.iter().map(|&i| self.side_nrm[i]).collect();
+        let fit = |normals: &[Vector3<f64>]| {
+            SharpFunction::fit(p, normals, &l, h, self.opts.min_normal_cos, 0.5 * self.tol)
+        };
+        let Some(f) = fit(n).or_else(|| fit(&ns)) else {
             return Attempt::Nothing;
         };
-        // Judged by the points' own and one-sided normals (`side_nrm`): either may agree.
-        let ns: Vec<Vector3<f64>> = idx.iter().map(|&i| self.side_nrm[i]).collect();
         let (values, agreement) = f.evaluate(p, n, &ns, self.tol);
         let fit = LocalFit {
             normal_agreement: agreement,
