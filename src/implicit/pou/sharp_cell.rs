@@ -195,7 +195,8 @@ impl Builder<'_> {
         let fit = |normals: &[Vector3<f64>]| {
             SharpFunction::fit(p, normals, &l, h, self.opts.min_normal_cos, 0.5 * self.tol)
         };
-        let Some(f) = fit(n).or_else(|| fit(&ns)) else {
+        // (A mesh's one-sided normals are its own: no second try.)
+        let Some(f) = fit(n).or_else(|| (ns != n).then(|| fit(&ns)).flatten()) else {
             return Attempt::Nothing;
         };
         let (values, agreement) = f.evaluate(p, n, &ns, self.tol);

@@ -492,20 +492,16 @@ fn crease_cells_are_judged_by_one_sided_normals() {
         })
         .collect();
     assert!(spoiled.iter().zip(&n).filter(|(a, b)| a != b).count() > 100);
-    let edges = || {
-        (0..=30).flat_map(|i| {
-            let t = -0.75 + 0.05 * i as f64;
-            [Point3::new(1.0, t, 0.5), Point3::new(-1.0, t, 0.5)]
-        })
-    };
     let opts = FitOptions::default();
     let judged = PouImplicit::fit_with_sides(&p, &spoiled, &l, &n, &opts).unwrap();
-    assert_on_zero_set(&judged, edges());
+    assert_on_zero_set(&judged, top_x_edges());
     // Judged by the spoiled normals alone, the crease cells fail and smooth fits round the
     // edges.
     let plain = PouImplicit::fit_with_regions(&p, &spoiled, Some(&l), &opts).unwrap();
     let tol = 2.0 * plain.stats().tolerance * plain.diagonal();
-    let worst = edges().map(|x| plain.value(&x).abs()).fold(0.0, f64::max);
+    let worst = top_x_edges()
+        .map(|x| plain.value(&x).abs())
+        .fold(0.0, f64::max);
     assert!(worst > 2.0 * tol, "{worst} {tol}");
     // One-sided normals must match the points.
     assert!(PouImplicit::fit_with_sides(&p, &spoiled, &l, &n[1..], &opts).is_err());
@@ -524,18 +520,22 @@ fn crease_cells_whose_estimated_normals_give_no_side_frame_use_the_one_sided_one
         .zip(&n)
         .map(|(x, m)| if near_edge(x) { Vector3::y() } else { *m })
         .collect();
-    let edges = || {
-        (0..=30).flat_map(|i| {
-            let t = -0.75 + 0.05 * i as f64;
-            [Point3::new(1.0, t, 0.5), Point3::new(-1.0, t, 0.5)]
-        })
-    };
     let opts = FitOptions::default();
     let with_sides = PouImplicit::fit_with_sides(&p, &spoiled, &l, &n, &opts).unwrap();
-    assert_on_zero_set(&with_sides, edges());
+    assert_on_zero_set(&with_sides, top_x_edges());
     // Fitted with the spoiled normals alone, the edges are off by more than that bound.
     let plain = PouImplicit::fit_with_regions(&p, &spoiled, Some(&l), &opts).unwrap();
     let tol = 2.0 * plain.stats().tolerance * plain.diagonal();
-    let worst = edges().map(|x| plain.value(&x).abs()).fold(0.0, f64::max);
+    let worst = top_x_edges()
+        .map(|x| plain.value(&x).abs())
+        .fold(0.0, f64::max);
     assert!(worst > tol, "{worst} {tol}");
+}
+
+/// Points along the box's top edges at x = +-1 (away from their ends).
+fn top_x_edges() -> impl Iterator<Item = Point3<f64>> {
+    (0..=30).flat_map(|i| {
+        let t = -0.75 + 0.05 * i as f64;
+        [Point3::new(1.0, t, 0.5), Point3::new(-1.0, t, 0.5)]
+    })
 }
