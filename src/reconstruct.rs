@@ -182,9 +182,9 @@ pub fn reconstruct(
             // then widens its search to no end (make_parts' block from its cloud: 23 s against
             // 2.8 s, and a worse crease). A mesh's may get their own region's
             // (`features::MeshOptions::face_labels`).
-            // Their crease cells are judged by their one-sided normals too (`side_normals`).
-            let (l, n) = seg.labels_and_normals(&op.points, &op.normals);
-            let sn = seg.side_normals(&op.points, &op.normals);
+            // Their crease cells are judged by their one-sided normals too, and fitted with
+            // them where their own give a side no frame (`labels_normals_and_sides`).
+            let (l, n, sn) = seg.labels_normals_and_sides(&op.points, &op.normals);
             PouImplicit::fit_with_sides(&op.points, &n, &l, &sn, &opts.fit)?
         }
         None => PouImplicit::fit(&op.points, &op.normals, &opts.fit)?,

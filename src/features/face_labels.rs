@@ -265,7 +265,9 @@ mod segmentation_tests {
         let (_, n) = seg.labels_and_normals(&op.points, &op.normals);
         assert!(!n.iter().all(axis_aligned));
         // A mesh's crease cells are judged by those normals too.
-        assert_eq!(seg.side_normals(&op.points, &op.normals), n.into_owned());
+        let (_, m, sides) = seg.labels_normals_and_sides(&op.points, &op.normals);
+        assert_eq!(m, n);
+        assert_eq!(sides, n.into_owned());
     }
 
     #[test]
@@ -297,7 +299,8 @@ mod segmentation_tests {
         let op = oriented_points(&cloud, 12).unwrap();
         let seg = segment(&cloud, &op, &FeatureOptions::default()).unwrap();
         assert_eq!(seg.regions.len(), 6);
-        let sides = seg.side_normals(&op.points, &op.normals);
+        let (labels, _, sides) = seg.labels_normals_and_sides(&op.points, &op.normals);
+        assert_eq!(labels, seg.labels_of(&op.points));
         let off = |n: &[nalgebra::Vector3<f64>]| {
             op.points
                 .iter()

@@ -211,37 +211,45 @@ impl Segmentation {
         }
     }
 
-    /// The normal of each of `points` from its own region alone, for judging a crease cell's
-    /// fit ([`crate::implicit::PouImplicit::fit_with_sides`]). For a cloud, that of the
-    /// labelled point nearest to it (the one [`Self::labels_of`] takes its region from): an
-    /// estimated normal beside a crease mixes both faces, and can be either face's or
+    /// [`Self::labels_and_normals`] with a third normal per point, of its own region alone, for
+    /// judging a crease cell's fit ([`crate::implicit::PouImplicit::fit_with_sides`]). For a
+    /// cloud, the one-sided normal of the labelled point nearest to it, the one its region
+    /// comes from (one query for both), or the point's own normal in `normals` where that has
+    /// none: an estimated normal beside a crease mixes both faces, and can be either face's or
     /// neither's; the one-sided one is its own face's (segmentation step 5,
-    /// [`segment_cloud`]). A mesh's points keep `normals` (those of
-    /// [`Self::labels_and_normals`]): a vertex normal averages the faces around the vertex, so
-    /// it is never along a crease nor the other face's alone, and the nearest labelled point
-    /// (a vertex of either region, or a triangle's centre) can be the wrong region's
-    /// (make_parts-style slot plate from its mesh: a slot's rim 1.2e-3 of the diagonal off
-    /// with them, 3.8e-4 without).
-    pub fn side_normals(
+    /// [`segment_cloud`]). A mesh's points keep the normals of [`Self::labels_and_normals`]: a
+    /// vertex normal averages the faces around the vertex, so it is never along a crease nor
+    /// the other face's alone, and the nearest labelled point (a vertex of either region, or a
+    /// triangle's centre) can be the wrong region's (make_parts-style slot plate from its
+    /// mesh: a slot's rim 1.2e-3 of the diagonal off with them, 3.8e-4 without).
+    #[allow(clippy::type_complexity)]
+    pub fn labels_normals_and_sides<'a>(
         &self,
         points: &[Point3<f64>],
-        normals: &[Vector3<f64>],
-    ) -> Vec<Vector3<f64>> {
+        normals: &'a [Vector3<f64>],
+    ) -> (
+        Vec<u32>,
+        std::borrow::Cow<'a, [Vector3<f64>]>,
+        Vec<Vector3<f64>>,
+    ) {
         let Some(label_normals) = &self.label_normals else {
-            return self.labels_and_normals(points, normals).1.into_owned();
+            let (labels, normals) = self.labels_and_normals(points, normals);
+            let sides = normals.to_vec();
+            return (labels, normals, sides);
         };
-        points
+        let (labels, sides) = points
             .iter()
             .zip(normals)
             .map(|(p, n)| {
-                let m = label_normals[self.label_kd.nearest(p).0];
-                if m.norm_squared() > 0.0 {
-                    m
-                } else {
-                    *n
-                }
+                let j = self.label_kd.nearest(p).0;
+                let m = label_normals[j];
+                (
+                    self.label_of[j],
+                    if m.norm_squared() > 0.0 { m } else { *n },
+                )
             })
-            .collect()
+            .unzip();
+        (labels, normals.into(), sides)
     }
 
     /// True when there is more than one region (something for the feature-aware stages to do).

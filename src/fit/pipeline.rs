@@ -355,8 +355,7 @@ pub fn fit_measured(
             let mut implicit_opts = opts.implicit.clone();
             implicit_opts.bridge_openings &= closure.chosen != crate::openings::Close::Open;
             // As in `reconstruct`: a mesh's points with their own region's normals.
-            let (labels, normals) = seg.labels_and_normals(&op.points, &op.normals);
-            let sides = seg.side_normals(&op.points, &op.normals);
+            let (labels, normals, sides) = seg.labels_normals_and_sides(&op.points, &op.normals);
             let fs =
                 PouImplicit::fit_with_sides(&op.points, &normals, &labels, &sides, &implicit_opts)?;
             let (mut cnet, creport, _, _) = build_crease_net(&fs, closure.chosen)?;

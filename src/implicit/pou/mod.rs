@@ -292,10 +292,11 @@ impl PouImplicit {
     }
 
     /// [`Self::fit_with_regions`] with a second normal per point, of its own region alone
-    /// (`side_normals`, [`crate::features::Segmentation::side_normals`]): a crease cell's sharp
-    /// function is fitted with `normals`, and a point counts against it only when neither of
-    /// its normals agrees ([`super::sharp::SharpFunction::evaluate`]: an estimated normal
-    /// beside a crease can be the other face's or lie along the crease).
+    /// (`side_normals`, [`crate::features::Segmentation::labels_normals_and_sides`]): a crease
+    /// cell's sharp function is fitted with `normals` (with `side_normals` where those give a
+    /// side no height frame), and a point counts against it only when neither of its normals
+    /// agrees ([`super::sharp::SharpFunction::evaluate`]: an estimated normal beside a crease
+    /// can be the other face's or lie along the crease).
     pub fn fit_with_sides(
         points: &[Point3<f64>],
         normals: &[Vector3<f64>],

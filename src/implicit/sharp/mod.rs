@@ -173,8 +173,8 @@ impl SharpFunction {
     /// of the points whose normal agrees ([`Self::normal_agreement`]), each side evaluated once
     /// per point: what a crease cell of the octree is assessed by. Each point has two normals,
     /// its own (`normals`) and its region's alone (`side_normals`,
-    /// [`crate::features::Segmentation::side_normals`]), and counts as agreeing when either
-    /// does. Beside a crease a cloud's estimated normal can be the other face's, or lie along
+    /// [`crate::features::Segmentation::labels_normals_and_sides`]), and counts as agreeing
+    /// when either does. Beside a crease a cloud's estimated normal can be the other face's, or lie along
     /// the crease (the PCA of an L of neighbours whose two least spreads are about equal:
     /// make_parts' wedge.xyz and cornerblock.xyz, four such points in cells of twenty failed
     /// every cell along a stretch of edge, whose smooth fits then cut it, 1.2e-3 and 9.1e-4 of
