@@ -45,6 +45,7 @@ pub mod segment_cloud;
 pub mod segment_mesh;
 pub mod sharp_choice;
 pub mod sharp_field;
+pub mod side_orientation;
 pub mod union_find;
 
 use crate::mesh::normals::vertex_normals;

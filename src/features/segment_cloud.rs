@@ -29,11 +29,15 @@
 //!    quadratic (from its own points) gives a normal, and when the median angle between them is
 //!    under `crease_deg` the two regions are one. What is left apart meets at a crease.
 //! 5. **One-sided normals.** Every point's normal is re-fitted from the neighbours of its own
-//!    region, so normals beside a crease are no longer a blend of both faces, and oriented by
-//!    the sum of those neighbours' input normals.
+//!    region, so normals beside a crease are no longer a blend of both faces, and oriented
+//!    within its region ([`super::side_orientation`]): the sign travels from point to point
+//!    of one region and each region's connected part agrees with the input normals summed
+//!    over it, so a strip of estimated normals flipped beside an acute crease does not flip
+//!    its one-sided normals.
 
 use super::local_fit::{region_fit, region_fit_trimmed, LocalQuadric, Support, FIT, MIN_SUPPORT};
 use super::merge::{merge_smooth, Boundaries, Labelled};
+use super::side_orientation::orient_within_regions;
 use super::RegionPair;
 use crate::spatial::KdTree;
 use nalgebra::{Point3, Vector3};
@@ -474,8 +478,8 @@ pub fn segment_cloud(
     }
     let (regions, pairs) = (merged.regions, merged.pairs);
 
-    // 5. One-sided normals.
-    let one_sided: Vec<Vector3<f64>> = (0..n)
+    // 5. One-sided normals, oriented within their regions.
+    let mut one_sided: Vec<Vector3<f64>> = (0..n)
         .into_par_iter()
         .map(|i| {
             let l = label[i];
@@ -483,22 +487,11 @@ pub fn segment_cloud(
                 return normals[i];
             }
             let idx: Vec<usize> = nbrs(i).iter().map(|&j| j as usize).collect();
-            let nrm = region_fit(points[i], &idx, &label, l, points, &m, FIT)
-                .map_or(m[i], |q| q.normal(&points[i]));
-            // Oriented by the input normals of its region's neighbours together, not its
-            // own alone: at a corner the estimated normal of one point may be flipped.
-            let side: Vector3<f64> = idx
-                .iter()
-                .filter(|&&j| label[j] == l)
-                .map(|&j| normals[j])
-                .sum();
-            if nrm.dot(&side) < 0.0 {
-                -nrm
-            } else {
-                nrm
-            }
+            region_fit(points[i], &idx, &label, l, points, &m, FIT)
+                .map_or(m[i], |q| q.normal(&points[i]))
         })
         .collect();
+    orient_within_regions(&mut one_sided, &label, normals, |i| &nbrs(i)[..link]);
     CloudLabels {
         label,
         regions,
