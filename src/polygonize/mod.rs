@@ -28,6 +28,7 @@ pub mod net_smooth;
 pub mod newton;
 pub mod patch_count;
 pub mod quad_net;
+pub mod quad_split;
 pub mod voxel_net;
 
 #[cfg(test)]
