@@ -5,6 +5,7 @@
 //! memory for this tool's inputs).
 
 pub mod adjacency;
+pub mod crease_remesh;
 pub mod normals;
 pub mod retain;
 pub mod sample;

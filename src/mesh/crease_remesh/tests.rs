@@ -1,0 +1,285 @@
+use super::*;
+use nalgebra::Rotation3;
+use std::collections::HashMap;
+
+/// A unit cube's faces, each an n x n grid of squares cut into two triangles, labelled by face
+/// (0..6), welded, counter-clockwise from outside.
+fn fine_cube(n: usize) -> LabelledMesh {
+    let mut index: HashMap<[usize; 3], u32> = HashMap::new();
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    let mut labels = Vec::new();
+    let mut vertex = |g: [usize; 3]| -> u32 {
+        *index.entry(g).or_insert_with(|| {
+            positions.push(Point3::new(
+                g[0] as f64 / n as f64,
+                g[1] as f64 / n as f64,
+                g[2] as f64 / n as f64,
+            ));
+            (positions.len() - 1) as u32
+        })
+    };
+    // Face by its normal axis and side; (u, v) axes chosen so u x v points outward.
+    for (label, (axis, side)) in [(0, 0), (0, 1), (1, 0), (1, 1), (2, 0), (2, 1)]
+        .into_iter()
+        .enumerate()
+    {
+        let (mut u, mut v) = ((axis + 1) % 3, (axis + 2) % 3);
+        if side == 0 {
+            std::mem::swap(&mut u, &mut v);
+        }
+        let at = |i: usize, j: usize| {
+            let mut g = [0; 3];
+            g[axis] = side * n;
+            g[u] = i;
+            g[v] = j;
+            g
+        };
+        for i in 0..n {
+            for j in 0..n {
+                let q = [
+                    vertex(at(i, j)),
+                    vertex(at(i + 1, j)),
+                    vertex(at(i + 1, j + 1)),
+                    vertex(at(i, j + 1)),
+                ];
+                triangles.push([q[0], q[1], q[2]]);
+                triangles.push([q[0], q[2], q[3]]);
+                labels.push(label as u32);
+                labels.push(label as u32);
+            }
+        }
+    }
+    LabelledMesh {
+        positions,
+        triangles,
+        labels,
+    }
+}
+
+fn transformed(m: &LabelledMesh, r: &Rotation3<f64>) -> LabelledMesh {
+    LabelledMesh {
+        positions: m.positions.iter().map(|p| r * p).collect(),
+        ..m.clone()
+    }
+}
+
+/// Distance of `p` (in the cube's own frame) from the unit cube's surface, and how many of
+/// its coordinates are 0 or 1 (2 on an edge, 3 at a corner).
+fn off_cube(p: &Point3<f64>) -> (f64, usize) {
+    let inside = p
+        .iter()
+        .map(|&x| x.min(1.0 - x))
+        .fold(f64::INFINITY, f64::min);
+    let on = p
+        .iter()
+        .filter(|&&x| x.abs() < 1e-9 || (x - 1.0).abs() < 1e-9)
+        .count();
+    (inside.abs(), on)
+}
+
+fn edges(m: &LabelledMesh) -> HashMap<(u32, u32), Vec<u32>> {
+    let mut e: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    for (f, t) in m.triangles.iter().enumerate() {
+        for i in 0..3 {
+            e.entry(key(t[i], t[(i + 1) % 3]))
+                .or_default()
+                .push(f as u32);
+        }
+    }
+    e
+}
+
+fn check_cube(out: &LabelledMesh, back: &Rotation3<f64>, target: f64) {
+    let p: Vec<Point3<f64>> = out.positions.iter().map(|q| back * q).collect();
+    // Closed 2-manifold, every edge between two triangles, Euler characteristic 2.
+    let e = edges(out);
+    assert!(e.values().all(|fs| fs.len() == 2));
+    assert_eq!(
+        out.positions.len() as i64 - e.len() as i64 + out.triangles.len() as i64,
+        2
+    );
+    // On the cube, its 8 corners kept.
+    for q in &p {
+        assert!(off_cube(q).0 < 1e-9, "{q} off the cube");
+    }
+    assert_eq!(p.iter().filter(|q| off_cube(q).1 == 3).count(), 8);
+    // Every edge between two labels lies on a cube edge, and each cube edge is covered.
+    let mut crease_length = 0.0;
+    for (&(a, b), fs) in &e {
+        if out.labels[fs[0] as usize] != out.labels[fs[1] as usize] {
+            let (pa, pb) = (p[a as usize], p[b as usize]);
+            assert!(off_cube(&pa).1 >= 2 && off_cube(&pb).1 >= 2, "{pa} {pb}");
+            crease_length += (pa - pb).norm();
+        }
+    }
+    assert!((crease_length - 12.0).abs() < 1e-9, "{crease_length}");
+    // Each triangle within one face of the cube (all its corners share the face's plane).
+    for (t, &l) in out.triangles.iter().zip(&out.labels) {
+        let axis = (l / 2) as usize;
+        let side = (l % 2) as f64;
+        for &v in t {
+            assert!((p[v as usize][axis] - side).abs() < 1e-9);
+        }
+    }
+    // Edge lengths near the target.
+    let mut lengths: Vec<f64> = e
+        .keys()
+        .map(|&(a, b)| (p[a as usize] - p[b as usize]).norm())
+        .collect();
+    lengths.sort_by(f64::total_cmp);
+    let median = lengths[lengths.len() / 2];
+    assert!(
+        median > 0.7 * target && median < 1.3 * target,
+        "median {median}"
+    );
+    let max = lengths[lengths.len() - 1];
+    assert!(max < 4.0 / 3.0 * target + 1e-9, "max {max}");
+}
+
+#[test]
+fn a_fine_cube_is_coarsened_keeping_its_edges_and_corners() {
+    let m = fine_cube(24);
+    let out = remesh(&m, &RemeshOptions::new(0.2)).unwrap();
+    assert!(out.triangles.len() < m.triangles.len() / 4);
+    check_cube(&out, &Rotation3::identity(), 0.2);
+}
+
+#[test]
+fn a_rotated_cube_keeps_its_edges_too() {
+    let r = Rotation3::from_euler_angles(0.3, 0.52, -0.2);
+    let m = transformed(&fine_cube(20), &r);
+    let out = remesh(&m, &RemeshOptions::new(0.25)).unwrap();
+    check_cube(&out, &r.inverse(), 0.25);
+}
+
+#[test]
+fn a_coarse_cube_is_refined() {
+    let m = fine_cube(1);
+    let out = remesh(&m, &RemeshOptions::new(0.2)).unwrap();
+    assert!(out.triangles.len() > 100);
+    check_cube(&out, &Rotation3::identity(), 0.2);
+}
+
+#[test]
+fn bad_input_is_an_error() {
+    let mut m = fine_cube(2);
+    m.labels.pop();
+    assert!(remesh(&m, &RemeshOptions::new(0.2)).is_err());
+    let m = fine_cube(2);
+    assert!(remesh(&m, &RemeshOptions::new(0.0)).is_err());
+    assert!(remesh(&m, &RemeshOptions::new(f64::NAN)).is_err());
+}
+
+/// A closed cylinder of radius 1 and height 1 around z: side (region 0) an `n` x `n / 4` grid,
+/// caps (regions 1 bottom, 2 top) polar grids of `n` segments and `n / 8` rings.
+fn fine_cylinder(n: usize) -> LabelledMesh {
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    let mut labels = Vec::new();
+    let rings = n / 8;
+    let rows = n / 4;
+    let at = |r: f64, k: usize, z: f64| {
+        let a = std::f64::consts::TAU * k as f64 / n as f64;
+        Point3::new(r * a.cos(), r * a.sin(), z)
+    };
+    // Side rows 0..=rows at z = row / rows; vertex (row, k) = row * n + k.
+    for row in 0..=rows {
+        for k in 0..n {
+            positions.push(at(1.0, k, row as f64 / rows as f64));
+        }
+    }
+    let side = |row: usize, k: usize| (row * n + k % n) as u32;
+    for row in 0..rows {
+        for k in 0..n {
+            let q = [
+                side(row, k),
+                side(row, k + 1),
+                side(row + 1, k + 1),
+                side(row + 1, k),
+            ];
+            triangles.push([q[0], q[1], q[2]]);
+            triangles.push([q[0], q[2], q[3]]);
+            labels.extend([0, 0]);
+        }
+    }
+    // Caps: inner rings 1..rings (ring `rings` is the side's rim), and a centre.
+    for (label, z, rim_row) in [(1u32, 0.0, 0usize), (2, 1.0, rows)] {
+        let centre = positions.len() as u32;
+        positions.push(Point3::new(0.0, 0.0, z));
+        let first = positions.len();
+        for ring in 1..rings {
+            for k in 0..n {
+                positions.push(at(ring as f64 / rings as f64, k, z));
+            }
+        }
+        let v = |ring: usize, k: usize| -> u32 {
+            if ring == rings {
+                side(rim_row, k)
+            } else {
+                (first + (ring - 1) * n + k % n) as u32
+            }
+        };
+        let mut add = |t: [u32; 3]| {
+            // Bottom faces -z, top faces +z.
+            triangles.push(if label == 1 { [t[0], t[2], t[1]] } else { t });
+            labels.push(label);
+        };
+        for k in 0..n {
+            add([centre, v(1, k), v(1, k + 1)]);
+            for ring in 1..rings {
+                add([v(ring, k), v(ring + 1, k), v(ring + 1, k + 1)]);
+                add([v(ring, k), v(ring + 1, k + 1), v(ring, k + 1)]);
+            }
+        }
+    }
+    LabelledMesh {
+        positions,
+        triangles,
+        labels,
+    }
+}
+
+#[test]
+fn a_round_crease_gets_edges_short_enough_for_the_tolerance() {
+    let m = fine_cylinder(256);
+    let tolerance = 2e-3;
+    let mut opts = RemeshOptions::new(0.5);
+    let chord = |out: &LabelledMesh| -> (f64, usize) {
+        let e = edges(out);
+        let mut worst: f64 = 0.0;
+        let mut n = 0;
+        for (&(a, b), fs) in &e {
+            assert_eq!(fs.len(), 2);
+            if out.labels[fs[0] as usize] != out.labels[fs[1] as usize] {
+                let m = nalgebra::center(&out.positions[a as usize], &out.positions[b as usize]);
+                worst = worst.max(1.0 - m.coords.xy().norm());
+                n += 1;
+            }
+        }
+        (worst, n)
+    };
+    let (coarse, n_coarse) = chord(&remesh(&m, &opts).unwrap());
+    opts.crease_tolerance = Some(tolerance);
+    let out = remesh(&m, &opts).unwrap();
+    let (fine, n_fine) = chord(&out);
+    // Without: edges of about 0.5, sagitta 0.03; with: within the tolerance (and the input
+    // polygon's own sagitta, 7.5e-5), with about sqrt(8 R tol) = 0.13 long edges.
+    assert!(coarse > 5.0 * tolerance, "{coarse}");
+    assert!(fine < tolerance + 1e-4, "{fine}");
+    assert!(
+        n_fine > 2 * n_coarse && n_fine < 2 * 2 * 80,
+        "{n_coarse} -> {n_fine}"
+    );
+    // The caps stay flat and the side round.
+    for (t, &l) in out.triangles.iter().zip(&out.labels) {
+        for &v in t {
+            let p = out.positions[v as usize];
+            match l {
+                0 => assert!((p.coords.xy().norm() - 1.0).abs() < 1e-3, "{p}"),
+                1 => assert!(p.z.abs() < 1e-12),
+                _ => assert!((p.z - 1.0).abs() < 1e-12),
+            }
+        }
+    }
+}
