@@ -131,9 +131,11 @@ pub fn orient_within_regions<'a>(
             part.push(to);
             push_edges(to, unit, &adj, &start, &done, &mut heap);
         }
+        // Finite terms only: one NaN normal must not silence the whole part's vote.
         let vote: f64 = part
             .iter()
             .map(|&i| unit[i as usize].dot(&votes[i as usize]))
+            .filter(|x| x.is_finite())
             .sum();
         if vote < 0.0 {
             for &i in &part {

@@ -307,6 +307,7 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
             mesh.positions.len()
         )));
     }
+    check_manifold(mesh)?;
     let mut s = State {
         pos: mesh.positions.clone(),
         tris: mesh.triangles.clone(),
@@ -376,6 +377,32 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
     }
     project(&mut s, &reference);
     Ok(compact(&s))
+}
+
+/// The remeshing needs an edge-manifold, consistently oriented mesh of proper triangles:
+/// every directed edge used once, so every edge by at most two triangles walking it in
+/// opposite directions.
+fn check_manifold(mesh: &LabelledMesh) -> Result<()> {
+    let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        if t[0] == t[1] || t[1] == t[2] || t[2] == t[0] {
+            return Err(Error::Degenerate(format!(
+                "remesh: triangle {f} repeats a vertex ({} {} {})",
+                t[0], t[1], t[2]
+            )));
+        }
+        for i in 0..3 {
+            if let Some(g) = directed.insert((t[i], t[(i + 1) % 3]), f) {
+                return Err(Error::Degenerate(format!(
+                    "remesh: triangles {g} and {f} both walk edge {} -> {} (an edge of more \
+                     than two triangles, or inconsistent orientation)",
+                    t[i],
+                    t[(i + 1) % 3]
+                )));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Splits edges longer than 4/3 L, or too curved for the tolerance, at their midpoints,

@@ -168,6 +168,20 @@ fn bad_input_is_an_error() {
     assert!(remesh(&m, &RemeshOptions::new(0.2)).is_err());
     let m = fine_cube(2);
     assert!(remesh(&m, &RemeshOptions::new(0.0)).is_err());
+    // A triangle repeating a vertex; an edge of three triangles (a fin on a cube edge).
+    let mut bad = m.clone();
+    bad.triangles.push([0, 0, 1]);
+    bad.labels.push(0);
+    let e = remesh(&bad, &RemeshOptions::new(0.2)).unwrap_err();
+    assert!(e.to_string().contains("repeats a vertex"), "{e}");
+    let mut fin = m.clone();
+    let t = fin.triangles[0];
+    fin.positions.push(Point3::new(-1.0, -1.0, -1.0));
+    fin.triangles
+        .push([t[1], t[0], (fin.positions.len() - 1) as u32]);
+    fin.labels.push(0);
+    let e = remesh(&fin, &RemeshOptions::new(0.2)).unwrap_err();
+    assert!(e.to_string().contains("both walk edge"), "{e}");
     assert!(remesh(&m, &RemeshOptions::new(f64::NAN)).is_err());
 }
 
