@@ -185,7 +185,7 @@ pub fn reconstruct(
             // Their crease cells are judged by their one-sided normals too, and fitted with
             // them where their own give a side no frame (`labels_normals_and_sides`).
             let (l, n, sn) = seg.labels_normals_and_sides(&op.points, &op.normals);
-            PouImplicit::fit_with_sides(&op.points, &n, &l, &sn, &opts.fit)?
+            PouImplicit::fit_with_sides(&op.points, &n, &l, sn.as_deref(), &opts.fit)?
         }
         None => PouImplicit::fit(&op.points, &op.normals, &opts.fit)?,
     };

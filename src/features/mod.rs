@@ -218,8 +218,8 @@ impl Segmentation {
     /// comes from (one query for both), or the point's own normal in `normals` where that has
     /// none: an estimated normal beside a crease mixes both faces, and can be either face's or
     /// neither's; the one-sided one is its own face's (segmentation step 5,
-    /// [`segment_cloud`]). A mesh's points keep the normals of [`Self::labels_and_normals`]: a
-    /// vertex normal averages the faces around the vertex, so it is never along a crease nor
+    /// [`segment_cloud`]). A mesh's points have none (`None`: judged by the normals of
+    /// [`Self::labels_and_normals`]): a vertex normal averages the faces around the vertex, so it is never along a crease nor
     /// the other face's alone, and the nearest labelled point (a vertex of either region, or a
     /// triangle's centre) can be the wrong region's (make_parts-style slot plate from its
     /// mesh: a slot's rim 1.2e-3 of the diagonal off with them, 3.8e-4 without).
@@ -231,12 +231,11 @@ impl Segmentation {
     ) -> (
         Vec<u32>,
         std::borrow::Cow<'a, [Vector3<f64>]>,
-        Vec<Vector3<f64>>,
+        Option<Vec<Vector3<f64>>>,
     ) {
         let Some(label_normals) = &self.label_normals else {
             let (labels, normals) = self.labels_and_normals(points, normals);
-            let sides = normals.to_vec();
-            return (labels, normals, sides);
+            return (labels, normals, None);
         };
         let (labels, sides) = points
             .iter()
@@ -250,7 +249,7 @@ impl Segmentation {
                 )
             })
             .unzip();
-        (labels, normals.into(), sides)
+        (labels, normals.into(), Some(sides))
     }
 
     /// True when there is more than one region (something for the feature-aware stages to do).

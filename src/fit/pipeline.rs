@@ -356,8 +356,13 @@ pub fn fit_measured(
             implicit_opts.bridge_openings &= closure.chosen != crate::openings::Close::Open;
             // As in `reconstruct`: a mesh's points with their own region's normals.
             let (labels, normals, sides) = seg.labels_normals_and_sides(&op.points, &op.normals);
-            let fs =
-                PouImplicit::fit_with_sides(&op.points, &normals, &labels, &sides, &implicit_opts)?;
+            let fs = PouImplicit::fit_with_sides(
+                &op.points,
+                &normals,
+                &labels,
+                sides.as_deref(),
+                &implicit_opts,
+            )?;
             let (mut cnet, creport, _, _) = build_crease_net(&fs, closure.chosen)?;
             let field = crate::features::sharp_field::SharpField { seg, f: &fs };
             let data_sides = crate::features::data_sides::DataSides {

@@ -45,8 +45,8 @@ pub(super) struct Builder<'a> {
     pub(super) pts: &'a [Point3<f64>],
     pub(super) nrm: &'a [Vector3<f64>],
     /// Each point's normal of its own region alone, by which (as by `nrm`) a crease cell's
-    /// sharp function is judged ([`super::PouImplicit::fit_with_sides`]; `nrm` without).
-    pub(super) side_nrm: &'a [Vector3<f64>],
+    /// sharp function is judged ([`super::PouImplicit::fit_with_sides`]; `None`: by `nrm`).
+    pub(super) side_nrm: Option<&'a [Vector3<f64>]>,
     pub(super) kd: &'a KdTree,
     /// The same points for the cells' box queries.
     pub(super) boxes: &'a BoxIndex,

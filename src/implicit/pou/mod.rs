@@ -288,11 +288,12 @@ impl PouImplicit {
         regions: Option<&[u32]>,
         opts: &FitOptions,
     ) -> Result<PouImplicit> {
-        Self::fit_labelled(points, normals, regions.map(|r| (r, normals)), opts)
+        Self::fit_labelled(points, normals, regions, None, opts)
     }
 
-    /// [`Self::fit_with_regions`] with a second normal per point, of its own region alone
-    /// (`side_normals`, [`crate::features::Segmentation::labels_normals_and_sides`]): a crease
+    /// [`Self::fit_with_regions`] with, for a cloud, a second normal per point, of its own region
+    /// alone (`side_normals`, [`crate::features::Segmentation::labels_normals_and_sides`];
+    /// `None`, a mesh's case, is `fit_with_regions`): a crease
     /// cell's sharp function is fitted with `normals` (with `side_normals` where those give a
     /// side no height frame), and a point counts against it only when neither of its normals
     /// agrees ([`super::sharp::SharpFunction::evaluate`]: an estimated normal beside a crease
@@ -301,23 +302,24 @@ impl PouImplicit {
         points: &[Point3<f64>],
         normals: &[Vector3<f64>],
         regions: &[u32],
-        side_normals: &[Vector3<f64>],
+        side_normals: Option<&[Vector3<f64>]>,
         opts: &FitOptions,
     ) -> Result<PouImplicit> {
-        if side_normals.len() != points.len() {
+        if let Some(sn) = side_normals.filter(|sn| sn.len() != points.len()) {
             return Err(Error::Degenerate(format!(
                 "{} points but {} one-sided normals",
                 points.len(),
-                side_normals.len()
+                sn.len()
             )));
         }
-        Self::fit_labelled(points, normals, Some((regions, side_normals)), opts)
+        Self::fit_labelled(points, normals, Some(regions), side_normals, opts)
     }
 
     fn fit_labelled(
         points: &[Point3<f64>],
         normals: &[Vector3<f64>],
-        regions: Option<(&[u32], &[Vector3<f64>])>,
+        regions: Option<&[u32]>,
+        side_normals: Option<&[Vector3<f64>]>,
         opts: &FitOptions,
     ) -> Result<PouImplicit> {
         opts.validate()?;
@@ -328,7 +330,7 @@ impl PouImplicit {
                 normals.len()
             )));
         }
-        if let Some((r, _)) = regions {
+        if let Some(r) = regions {
             if r.len() != points.len() {
                 return Err(Error::Degenerate(format!(
                     "{} points but {} region labels",
@@ -349,8 +351,10 @@ impl PouImplicit {
                 if u.iter().all(|c| c.is_finite()) {
                     pts.push(*p);
                     nrm.push(u);
-                    if let Some((r, sn)) = regions {
+                    if let Some(r) = regions {
                         labels.push(r[i]);
+                    }
+                    if let Some(sn) = side_normals {
                         side_nrm.push(sn[i].try_normalize(1e-300).unwrap_or(u));
                     }
                 }
@@ -414,7 +418,7 @@ impl PouImplicit {
             spacing,
             root_half: 0.5 * root.size,
             labels: regions.map(|_| labels.as_slice()),
-            side_nrm: if regions.is_some() { &side_nrm } else { &nrm },
+            side_nrm: side_normals.map(|_| side_nrm.as_slice()),
         };
         let tree = Octree::build(root, &pts, opts.max_depth, |c| builder.decide(c));
         let mut stats = FitStats {

@@ -191,15 +191,17 @@ impl Builder<'_> {
         // (estimates scattered beside an acute crease: the V block's cloud where a hole meets
         // a flank, 2.4e-3 -> 2.0e-3 of the diagonal), their one-sided ones (`side_nrm`), and
         // judged by both: either may agree (`SharpFunction::evaluate`).
-        let ns: Vec<Vector3<f64>> = idx.iter().map(|&i| self.side_nrm[i]).collect();
+        // (A mesh has no one-sided normals: no second try.)
+        let ns: Option<Vec<Vector3<f64>>> = self
+            .side_nrm
+            .map(|side| idx.iter().map(|&i| side[i]).collect());
         let fit = |normals: &[Vector3<f64>]| {
             SharpFunction::fit(p, normals, &l, h, self.opts.min_normal_cos, 0.5 * self.tol)
         };
-        // (A mesh's one-sided normals are its own: no second try.)
-        let Some(f) = fit(n).or_else(|| (ns != n).then(|| fit(&ns)).flatten()) else {
+        let Some(f) = fit(n).or_else(|| ns.as_deref().and_then(fit)) else {
             return Attempt::Nothing;
         };
-        let (values, agreement) = f.evaluate(p, n, &ns, self.tol);
+        let (values, agreement) = f.evaluate(p, n, ns.as_deref().unwrap_or(n), self.tol);
         let fit = LocalFit {
             normal_agreement: agreement,
             ..local::assess_values(LocalFunction::Sharp(f), &values, n)

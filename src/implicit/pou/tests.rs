@@ -493,7 +493,7 @@ fn crease_cells_are_judged_by_one_sided_normals() {
         .collect();
     assert!(spoiled.iter().zip(&n).filter(|(a, b)| a != b).count() > 100);
     let opts = FitOptions::default();
-    let judged = PouImplicit::fit_with_sides(&p, &spoiled, &l, &n, &opts).unwrap();
+    let judged = PouImplicit::fit_with_sides(&p, &spoiled, &l, Some(&n), &opts).unwrap();
     assert_on_zero_set(&judged, top_x_edges());
     // Judged by the spoiled normals alone, the crease cells fail and smooth fits round the
     // edges.
@@ -504,7 +504,7 @@ fn crease_cells_are_judged_by_one_sided_normals() {
         .fold(0.0, f64::max);
     assert!(worst > 2.0 * tol, "{worst} {tol}");
     // One-sided normals must match the points.
-    assert!(PouImplicit::fit_with_sides(&p, &spoiled, &l, &n[1..], &opts).is_err());
+    assert!(PouImplicit::fit_with_sides(&p, &spoiled, &l, Some(&n[1..]), &opts).is_err());
 }
 
 #[test]
@@ -521,7 +521,7 @@ fn crease_cells_whose_estimated_normals_give_no_side_frame_use_the_one_sided_one
         .map(|(x, m)| if near_edge(x) { Vector3::y() } else { *m })
         .collect();
     let opts = FitOptions::default();
-    let with_sides = PouImplicit::fit_with_sides(&p, &spoiled, &l, &n, &opts).unwrap();
+    let with_sides = PouImplicit::fit_with_sides(&p, &spoiled, &l, Some(&n), &opts).unwrap();
     assert_on_zero_set(&with_sides, top_x_edges());
     // Fitted with the spoiled normals alone, the edges are off by more than that bound.
     let plain = PouImplicit::fit_with_regions(&p, &spoiled, Some(&l), &opts).unwrap();
