@@ -365,17 +365,19 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
                 break;
             }
         }
-        relax(&mut s);
-        project(&mut s, &reference);
+        // Relaxation moves vertices only: one adjacency serves both.
+        let topo = s.topo();
+        relax(&mut s, &topo);
+        project(&mut s, &topo, &reference);
     }
     // The relaxation stretches a few edges past 4/3 L again: split those, onto the input.
     for _ in 0..16 {
         if split_long(&mut s, &rules) == 0 {
             break;
         }
-        project(&mut s, &reference);
+        let topo = s.topo();
+        project(&mut s, &topo, &reference);
     }
-    project(&mut s, &reference);
     Ok(compact(&s))
 }
 
@@ -556,7 +558,7 @@ fn may_collapse(s: &State, topo: &Topo, gone: u32, kept: u32, rules: &Rules) -> 
     // No new edge too curved for the tolerance: (kept, x) for every neighbour x of gone,
     // on the crease where it replaces a crease edge of gone, else inside its triangles' region.
     if rules.crease_tolerance.is_some() || rules.surface_tolerance.is_some() {
-        for x in topo.neighbours(s, gone) {
+        for &x in &ng {
             if x == kept || opposite.contains(&x) {
                 continue;
             }
@@ -652,8 +654,7 @@ fn flip_to_valence(s: &mut State, rules: &Rules) -> usize {
 /// Tangential relaxation: a smooth vertex towards the area-weighted centroid of its triangles'
 /// centres within its tangent plane, a crease vertex towards the midpoint of its two crease
 /// neighbours along its crease; corners stay.
-fn relax(s: &mut State) {
-    let topo = s.topo();
+fn relax(s: &mut State, topo: &Topo) {
     let moved: Vec<Point3<f64>> = (0..s.pos.len() as u32)
         .map(|v| {
             let p = s.pos[v as usize];
@@ -700,8 +701,7 @@ fn relax(s: &mut State) {
 
 /// Every vertex back onto the input: a smooth one onto its region's triangles, a crease one onto
 /// the input crease between its two regions.
-fn project(s: &mut State, reference: &Reference) {
-    let topo = s.topo();
+fn project(s: &mut State, topo: &Topo, reference: &Reference) {
     for v in 0..s.pos.len() as u32 {
         let fs = &topo.vfaces[v as usize];
         if fs.is_empty() {
