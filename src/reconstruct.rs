@@ -190,72 +190,26 @@ pub fn reconstruct(
         None => PouImplicit::fit(&op.points, &op.normals, &opts.fit)?,
     };
     timings.fit = t.elapsed().as_secs_f64();
-    let diag = f.diagonal();
-    let spacing = mean_spacing(f.points().0, f.kdtree());
-
-    progress("polygonize", 0.4);
-    let t = Instant::now();
-    // Never finer than 1/2000 of the diagonal: clustered points (a coarse mesh with a few dense
-    // spots) would otherwise set a grid fine everywhere.
-    let cell = match opts.cell_size {
-        Some(c) => c,
-        None => opts.resolution * spacing.max(diag / 2000.0),
-    };
-    let root = f.domain();
-    let dom = crate::mesh::Aabb {
-        min: root.min,
-        max: root.max(),
-    };
-    let mesh = marching_cubes(&f, f.points().0, &dom, cell)?;
-    if mesh.faces.is_empty() {
-        return Err(Error::Degenerate(
-            "the implicit surface has no zero crossing near the points".into(),
-        ));
-    }
-    // Spurious sheets beside the surface are the nearest surface for no input point.
-    // A part with fewer points than half a fit needs is not reconstructible: noise or outliers.
-    let min_votes = (opts.fit.min_points / 2).max(op.original / 5_000);
-    let (mut mesh, removed_components) =
-        keep_supported_components(mesh, &op.points[..op.original], min_votes)?;
-    timings.polygonize = t.elapsed().as_secs_f64();
-    let (mc_v, mc_f) = (mesh.positions.len(), mesh.faces.len());
-
-    progress("relax", 0.55);
-    let t = Instant::now();
-    let proj = ProjectOptions::for_diagonal(diag);
-    let relax_failures = relax(&mut mesh, &f, opts.relax_iterations, &proj);
-    timings.relax = t.elapsed().as_secs_f64();
-
-    progress("refine", 0.7);
-    let t = Instant::now();
-    let ropts = RefineOptions {
-        tolerance: mesh_tol * diag,
-        quantile: 0.99,
-        max_levels: opts.max_subdivisions,
-        relax_iterations: 0,
-        max_faces: opts.max_faces,
-    };
-    // Sharp: the triangles across a crease count too; they keep the gap quantile high, and
-    // the extra level they cost puts the split points below closer together (without them
-    // make_parts' wedge.stl gets 99 k triangles instead of 1.5 M, but its crease p95 goes
-    // from 1.6e-4 to 9.9e-4 of the diagonal).
-    let (mut mesh, refine_report) = refine(mesh, &f, &ropts, &proj);
     let side_field = segmentation.as_ref().map(|seg| SharpField { seg, f: &f });
-    timings.refine = t.elapsed().as_secs_f64();
-    // Sharp: the triangles that cut across a crease split where its two faces meet.
-    let t = Instant::now();
-    let creases = side_field
-        .as_ref()
-        .map(|field| split_at_creases(&mut mesh, field, &CreaseSplitOptions::default()));
-    timings.creases = t.elapsed().as_secs_f64();
-    // Global orientation check: a closed result must enclose a positive volume (it would not if
-    // the normals, and so the implicit's sign, came out inverted).
-    let flipped_output = mesh.signed_volume() < 0.0;
-    if flipped_output {
-        for tri in &mut mesh.faces {
-            tri.swap(1, 2);
-        }
-    }
+    let SurfaceMesh {
+        mesh,
+        cell,
+        spacing,
+        marching_cubes: (mc_v, mc_f),
+        removed_components,
+        relax_failures,
+        refine: refine_report,
+        creases,
+        flipped_output,
+    } = surface_mesh(
+        &f,
+        &op.points[..op.original],
+        side_field.as_ref(),
+        opts,
+        &mut timings,
+        progress,
+    )?;
+    let diag = f.diagonal();
 
     progress("deviation", 0.9);
     let t = Instant::now();
@@ -297,6 +251,114 @@ pub fn reconstruct(
         timings,
     };
     Ok((mesh, report))
+}
+
+/// The mesh of an implicit's zero set and what making it took.
+pub struct SurfaceMesh {
+    pub mesh: Mesh,
+    /// Marching-cubes cube edge and the points' typical spacing it was set from.
+    pub cell: f64,
+    pub spacing: f64,
+    /// Vertices and faces of the marching-cubes mesh.
+    pub marching_cubes: (usize, usize),
+    pub removed_components: usize,
+    pub relax_failures: usize,
+    pub refine: RefineReport,
+    /// The split at the creases (with a sharp field).
+    pub creases: Option<CreaseSplitReport>,
+    /// The mesh enclosed a negative volume and was turned inside out.
+    pub flipped_output: bool,
+}
+
+/// Meshes the zero set of `f` (the stages between the fit and the deviation of
+/// [`reconstruct`]): sparse marching cubes, the components `data` (the input points) do not
+/// support dropped, centroid relaxation, subdivision to the tolerance, and with a sharp
+/// `side_field` the split of the triangles across its creases; turned outward when it enclosed
+/// a negative volume. `fit --sharp` meshes its sharp implicit with it too.
+pub fn surface_mesh(
+    f: &PouImplicit,
+    data: &[nalgebra::Point3<f64>],
+    side_field: Option<&SharpField>,
+    opts: &ReconstructOptions,
+    timings: &mut Timings,
+    progress: &mut dyn FnMut(&str, f64),
+) -> Result<SurfaceMesh> {
+    let diag = f.diagonal();
+    let spacing = mean_spacing(f.points().0, f.kdtree());
+    let mesh_tol = opts.tolerance.unwrap_or(3.0 * opts.fit.tolerance);
+
+    progress("polygonize", 0.4);
+    let t = Instant::now();
+    // Never finer than 1/2000 of the diagonal: clustered points (a coarse mesh with a few dense
+    // spots) would otherwise set a grid fine everywhere.
+    let cell = match opts.cell_size {
+        Some(c) => c,
+        None => opts.resolution * spacing.max(diag / 2000.0),
+    };
+    let root = f.domain();
+    let dom = crate::mesh::Aabb {
+        min: root.min,
+        max: root.max(),
+    };
+    let mesh = marching_cubes(f, f.points().0, &dom, cell)?;
+    if mesh.faces.is_empty() {
+        return Err(Error::Degenerate(
+            "the implicit surface has no zero crossing near the points".into(),
+        ));
+    }
+    // Spurious sheets beside the surface are the nearest surface for no input point.
+    // A part with fewer points than half a fit needs is not reconstructible: noise or outliers.
+    let min_votes = (opts.fit.min_points / 2).max(data.len() / 5_000);
+    let (mut mesh, removed_components) = keep_supported_components(mesh, data, min_votes)?;
+    timings.polygonize = t.elapsed().as_secs_f64();
+    let (mc_v, mc_f) = (mesh.positions.len(), mesh.faces.len());
+
+    progress("relax", 0.55);
+    let t = Instant::now();
+    let proj = ProjectOptions::for_diagonal(diag);
+    let relax_failures = relax(&mut mesh, f, opts.relax_iterations, &proj);
+    timings.relax = t.elapsed().as_secs_f64();
+
+    progress("refine", 0.7);
+    let t = Instant::now();
+    let ropts = RefineOptions {
+        tolerance: mesh_tol * diag,
+        quantile: 0.99,
+        max_levels: opts.max_subdivisions,
+        relax_iterations: 0,
+        max_faces: opts.max_faces,
+    };
+    // Sharp: the triangles across a crease count too; they keep the gap quantile high, and
+    // the extra level they cost puts the split points below closer together (without them
+    // make_parts' wedge.stl gets 99 k triangles instead of 1.5 M, but its crease p95 goes
+    // from 1.6e-4 to 9.9e-4 of the diagonal).
+    let (mut mesh, refine_report) = refine(mesh, f, &ropts, &proj);
+    timings.refine = t.elapsed().as_secs_f64();
+    // Sharp: the triangles that cut across a crease split where its two faces meet.
+    let t = Instant::now();
+    let creases =
+        side_field.map(|field| split_at_creases(&mut mesh, field, &CreaseSplitOptions::default()));
+    timings.creases = t.elapsed().as_secs_f64();
+    // Global orientation check: a closed result must enclose a positive volume (it would not if
+    // the normals, and so the implicit's sign, came out inverted).
+    let flipped_output = mesh.signed_volume() < 0.0;
+    if flipped_output {
+        for tri in &mut mesh.faces {
+            tri.swap(1, 2);
+        }
+    }
+
+    Ok(SurfaceMesh {
+        mesh,
+        cell,
+        spacing,
+        marching_cubes: (mc_v, mc_f),
+        removed_components,
+        relax_failures,
+        refine: refine_report,
+        creases,
+        flipped_output,
+    })
 }
 
 #[cfg(test)]

@@ -77,14 +77,22 @@ pub struct Args {
     pub features: bool,
     /// Also build the crease-aligned quad net (work in progress, issue 36): find the smooth
     /// regions and creases first (as `scansurf features`), fit a second implicit with one
-    /// function per region in the cells a crease crosses, build its net in the frame of the
-    /// part's plane faces and put the nodes on the creases and corners (the report's
-    /// `crease_nodes`; `--net` writes this net, by region). The STEP is unchanged for now: its
-    /// patches are built on the smooth net. `on` whenever the input has creases (`--sharp`
-    /// alone means `on`), `auto` when it looks machined (as `reconstruct`), `off` (default).
+    /// function per region in the cells a crease crosses, and build a net whose edges follow
+    /// the creases (`--crease-net`; the report's `crease_remesh` or `crease_nodes`, `--net`
+    /// writes this net, by region). The STEP is unchanged for now: its patches are built on
+    /// the smooth net. `on` whenever the input has creases (`--sharp` alone means `on`),
+    /// `auto` when it looks machined (as `reconstruct`), `off` (default).
     #[arg(long, value_enum, default_value_t = crate::features::SharpMode::Off, num_args = 0..=1,
           default_missing_value = "on", value_name = "on|off|auto")]
     pub sharp: crate::features::SharpMode,
+    /// How `--sharp` builds its crease-aligned net: `remesh` (default) meshes the sharp
+    /// implicit as `reconstruct` does, remeshes it with its creases kept as edge paths and its
+    /// corners pinned, and splits every triangle into three quads; `voxel` puts the voxel
+    /// net's nodes on the creases and corners (a staircase where a crease runs at an angle to
+    /// the grid).
+    #[arg(long, value_enum, default_value_t = crate::fit::crease_net::CreaseNetRoute::Remesh,
+          value_name = "remesh|voxel")]
+    pub crease_net: crate::fit::crease_net::CreaseNetRoute,
     /// What to do where the data stop (a part scanned on a table has no underside): `open`
     /// fits only the scanned surface (an open shell); `smooth` closes every opening with the
     /// implicit's smooth extension (a solid); `auto` closes when the data enclose a volume (at
@@ -223,6 +231,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         features: a.features.then(crate::features::DetectOptions::default),
         close,
         sharp: a.sharp,
+        crease_net: a.crease_net,
         size_given: a.patches.is_some() || a.patch_size.is_some(),
         ..FitOptions::default()
     };

@@ -2,6 +2,7 @@
 //! (seed 004 section 3, Fig. 5(c)): sample grids on f = 0 with boundary tangents, shared
 //! bit-for-bit along every net edge so that the patch network is watertight by construction.
 //!
+//! - [`crease_net`]: the crease-aligned net of `--sharp`, by remesh or voxel net;
 //! - [`net`]: the quad net stage (voxel size from the patch count, voxel net, projection and
 //!   smoothing) in one call;
 //! - [`ribbons`]: quad strips (ribbons) of edges that must share one sample count;
@@ -13,6 +14,7 @@
 //! - [`samples`]: the per-patch grids, their counts chosen from `--tolerance`.
 //! - [`vertex_twists`]: corner twists made first-order compatible around every net vertex.
 
+pub mod crease_net;
 pub mod cross_tangents;
 pub mod edge_curve;
 pub mod net;

@@ -4,6 +4,7 @@
 //! tangents (eq. 9-14) -> a sewn patch network, measured: deviation of the input points from the
 //! patches by point inversion, normal jump across shared edges, quad quality, timings.
 
+use super::crease_net::CreaseNet;
 use super::cross_tangents::{align_cross_derivatives, corner_twists, BoundarySplines};
 use super::net::{fit_net, fit_open_net, NetReport, PatchSize, TrialScore};
 use super::samples::{
@@ -60,6 +61,9 @@ pub struct FitOptions {
     /// patches are still those of the smooth implicit's net. `Auto` decides as `reconstruct`
     /// does ([`crate::features::sharp_choice`]).
     pub sharp: crate::features::SharpMode,
+    /// How `--sharp` builds its crease-aligned net (`--crease-net`, default `remesh`;
+    /// [`super::crease_net`]).
+    pub crease_net: super::crease_net::CreaseNetRoute,
     /// Whether the user gave the patch count or size (`--patches`, `--patch-size`). When not,
     /// an open fit whose net misses parts of the data thinner than a patch is made again with
     /// more patches ([`crate::openings::coverage`]); when given, the report only says so.
@@ -91,6 +95,7 @@ impl Default for FitOptions {
             features: None,
             close: crate::openings::Close::Auto,
             sharp: crate::features::SharpMode::Off,
+            crease_net: super::crease_net::CreaseNetRoute::Remesh,
             size_given: false,
         }
     }
@@ -173,9 +178,14 @@ pub struct FitReport {
     /// The crease-aligned net (`--sharp` when kept): what `--net` writes then.
     #[serde(skip)]
     pub crease_net: Option<QuadNet>,
-    /// The crease-aligned net's nodes put on the creases and corners (`--sharp` when kept).
+    /// The crease-aligned net's nodes put on the creases and corners (`--sharp` when kept,
+    /// `--crease-net voxel`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub crease_nodes: Option<crate::polygonize::crease_nodes::CreaseNodesReport>,
+    /// The crease-aligned net remeshed from the sharp implicit's mesh (`--sharp` when kept,
+    /// `--crease-net remesh`): its sizes, creases, corners and quality.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crease_remesh: Option<crate::polygonize::remesh_net::RemeshNetReport>,
     /// The patches labelled by the smooth regions of `features` (`fit --features`), or the
     /// quads of the crease-aligned net by the regions its nodes were put between (`--sharp`,
     /// when kept).
@@ -277,6 +287,7 @@ pub fn fit_measured(
     // their frame ([`crate::features::grid_frame`]), so that its creases run along the grid.
     let grid_frame = segmentation
         .as_ref()
+        .filter(|_| opts.crease_net == super::crease_net::CreaseNetRoute::Voxel)
         .and_then(crate::features::grid_frame::grid_frame);
     let framed = grid_frame
         .as_ref()
@@ -363,23 +374,42 @@ pub fn fit_measured(
                 sides.as_deref(),
                 &implicit_opts,
             )?;
-            let (mut cnet, creport, _, _) = build_crease_net(&fs, closure.chosen)?;
             let field = crate::features::sharp_field::SharpField { seg, f: &fs };
-            let data_sides = crate::features::data_sides::DataSides {
-                seg,
-                radius: DATA_SIDES_RADIUS * creport.h,
+            let built = match opts.crease_net {
+                super::crease_net::CreaseNetRoute::Remesh => {
+                    let open = closure.chosen == crate::openings::Close::Open;
+                    let r = super::crease_net::remeshed(&super::crease_net::RemeshInputs {
+                        f: &fs,
+                        implicit: &implicit_opts,
+                        field: &field,
+                        data: &op.points[..op.original],
+                        tree: &data,
+                        open_support: open
+                            .then_some(crate::openings::SUPPORT_RADIUS * net_report.h),
+                        quads: net_report.patches,
+                    })?;
+                    CreaseNet::Remeshed(r)
+                }
+                super::crease_net::CreaseNetRoute::Voxel => {
+                    let (mut cnet, creport, _, _) = build_crease_net(&fs, closure.chosen)?;
+                    let data_sides = crate::features::data_sides::DataSides {
+                        seg,
+                        radius: DATA_SIDES_RADIUS * creport.h,
+                    };
+                    let smooth = crate::polygonize::net_smooth::SmoothOptions::new(diag, creport.h);
+                    let placed = crate::polygonize::crease_nodes::place_on_creases(
+                        &mut cnet,
+                        &fs,
+                        &field,
+                        Some(&data_sides),
+                        &smooth,
+                        &crate::polygonize::crease_nodes::CreaseNodeOptions::default(),
+                    )?;
+                    CreaseNet::Placed(placed, cnet, seg.regions.len())
+                }
             };
-            let smooth = crate::polygonize::net_smooth::SmoothOptions::new(diag, creport.h);
-            let placed = crate::polygonize::crease_nodes::place_on_creases(
-                &mut cnet,
-                &fs,
-                &field,
-                Some(&data_sides),
-                &smooth,
-                &crate::polygonize::crease_nodes::CreaseNodeOptions::default(),
-            )?;
             timings.creases = t.elapsed().as_secs_f64();
-            Some((placed, cnet, seg.regions.len()))
+            Some(built)
         }
         None => None,
     };
@@ -467,19 +497,29 @@ pub fn fit_measured(
         hole_fill: None,
         step: None,
         net_regions: match &crease_net {
-            Some((c, cnet, regions)) => Some(crate::features::net_regions::from_labels(
-                &cnet.quads,
-                c.quad_region.clone(),
-                *regions,
-            )),
+            Some(c) => {
+                let (net, labels, regions) = c.labelled();
+                Some(crate::features::net_regions::from_labels(
+                    &net.quads,
+                    labels.to_vec(),
+                    regions,
+                ))
+            }
             None => features
                 .as_ref()
                 .map(|found| crate::features::net_regions::label_network(&network, found)),
         },
         sharp,
         grid_frame,
-        crease_nodes: crease_net.as_ref().map(|(c, _, _)| c.report.clone()),
-        crease_net: crease_net.map(|(_, cnet, _)| cnet),
+        crease_nodes: crease_net.as_ref().and_then(|c| match c {
+            CreaseNet::Placed(p, _, _) => Some(p.report.clone()),
+            CreaseNet::Remeshed(_) => None,
+        }),
+        crease_remesh: crease_net.as_ref().and_then(|c| match c {
+            CreaseNet::Remeshed(r) => Some(r.report.clone()),
+            CreaseNet::Placed(..) => None,
+        }),
+        crease_net: crease_net.map(CreaseNet::into_net),
         features: features.map(|found| found.summary()),
         timings,
     };

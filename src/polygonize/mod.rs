@@ -19,7 +19,9 @@ pub mod crease_snap;
 pub mod crease_split;
 pub mod marching_cubes;
 pub mod relax;
+pub mod remesh_net;
 pub mod ring_corners;
+pub mod side_projection;
 pub mod subdivide;
 
 pub mod log_map;

@@ -1,0 +1,159 @@
+//! A labelled quad net's nodes put onto the sharp implicit's sides (`fit --sharp`, the remesh
+//! route of [`super::remesh_net`]).
+//!
+//! The net comes from a mesh of the implicit split into quads: its edge midpoints and triangle
+//! centroids lie on chords, up to the sagitta L^2 / (8 R) off a surface of radius R, and its
+//! labels are those of the mesh's own segmentation. Each net region is first given the sharp
+//! implicit's region most of its quads' centres lie on ([`SideField::region`]); then every
+//! node moves onto the surfaces of the regions of its quads:
+//! - one region r (a face node): Newton steps x <- x - f_r(x) grad f_r / |grad f_r|^2 on that
+//!   side's function (continued past its creases, so a node beside a crease stays on its own
+//!   face);
+//! - two or three regions (a crease node, a corner): the meeting point of their surfaces
+//!   nearest to the node, f_a = f_b (= f_c) = 0 ([`meet_point`], Gauss-Newton);
+//!
+//! A move longer than `max_move` (or a solve that fails) is not made: the node stays where the
+//! remesh put it. Nodes of an open boundary are left alone.
+
+use super::crease_split::{meet_point, CreaseSplitOptions, SideField};
+use super::quad_net::{QuadNet, NO_QUAD};
+use nalgebra::Point3;
+use rayon::prelude::*;
+use std::collections::BTreeSet;
+
+/// What [`project_onto_sides`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct SideProjectionReport {
+    /// Nodes moved onto one side, onto a crease, onto a corner.
+    pub face_nodes: usize,
+    pub crease_nodes: usize,
+    pub corner_nodes: usize,
+    /// Nodes left where they were (no converged solve within the reach, or two net regions
+    /// on one side of the implicit beside a node of three).
+    pub kept: usize,
+    /// Largest move made, model units.
+    pub max_move: f64,
+}
+
+/// Newton steps at most for a face node.
+const FACE_STEPS: usize = 20;
+
+/// The implicit region of each of the net's `regions` regions: the one most quad centres lie
+/// on.
+pub fn region_map(
+    net: &QuadNet,
+    quad_region: &[u32],
+    regions: usize,
+    field: &dyn SideField,
+) -> Vec<u32> {
+    let votes: Vec<(u32, u32)> = net
+        .quads
+        .par_iter()
+        .zip(quad_region.par_iter())
+        .map(|(q, &r)| {
+            let c = Point3::from(
+                q.iter()
+                    .map(|&i| net.nodes[i as usize].coords)
+                    .sum::<nalgebra::Vector3<f64>>()
+                    / 4.0,
+            );
+            (r, field.region(&c))
+        })
+        .collect();
+    let mut counts: Vec<std::collections::BTreeMap<u32, usize>> = vec![Default::default(); regions];
+    for (r, s) in votes {
+        if let Some(m) = counts.get_mut(r as usize) {
+            *m.entry(s).or_default() += 1;
+        }
+    }
+    counts
+        .iter()
+        .enumerate()
+        .map(|(r, m)| {
+            m.iter()
+                .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
+                .map_or(r as u32, |(&s, _)| s)
+        })
+        .collect()
+}
+
+/// Moves the nodes of `net` (quads labelled `quad_region`, mapped to the field's regions by
+/// `map`) onto the sides of `field` (module doc); `scale` sets the solves' tolerance (the
+/// net's edge length), `max_move` the longest move made.
+pub fn project_onto_sides(
+    net: &mut QuadNet,
+    quad_region: &[u32],
+    map: &[u32],
+    field: &dyn SideField,
+    scale: f64,
+    max_move: f64,
+) -> SideProjectionReport {
+    let opts = CreaseSplitOptions::default();
+    let mut on_boundary = vec![false; net.nodes.len()];
+    for (e, qs) in net.edges.iter().zip(&net.edge_quads) {
+        if qs.contains(&NO_QUAD) {
+            on_boundary[e[0] as usize] = true;
+            on_boundary[e[1] as usize] = true;
+        }
+    }
+    let moved: Vec<Option<(Point3<f64>, usize)>> = (0..net.nodes.len())
+        .into_par_iter()
+        .map(|i| {
+            if on_boundary[i] {
+                return None;
+            }
+            let quads = net.node_quads(i);
+            let sides: BTreeSet<u32> = quads
+                .iter()
+                .filter_map(|&q| map.get(quad_region[q as usize] as usize).copied())
+                .collect();
+            let sides: Vec<u32> = sides.into_iter().collect();
+            let x = net.nodes[i];
+            let y = match sides.len() {
+                1 => onto_side(field, sides[0], x, scale, opts.tolerance),
+                2 | 3 => meet_point(field, &sides, x, scale, &opts),
+                _ => None,
+            }?;
+            ((y - x).norm() <= max_move).then_some((y, sides.len()))
+        })
+        .collect();
+    let mut report = SideProjectionReport::default();
+    for (i, m) in moved.into_iter().enumerate() {
+        match m {
+            Some((y, k)) => {
+                report.max_move = report.max_move.max((y - net.nodes[i]).norm());
+                net.nodes[i] = y;
+                match k {
+                    1 => report.face_nodes += 1,
+                    2 => report.crease_nodes += 1,
+                    _ => report.corner_nodes += 1,
+                }
+            }
+            None => report.kept += 1,
+        }
+    }
+    report
+}
+
+/// Newton's iteration onto f_region = 0 from `x`, or `None` when it does not converge to
+/// |f| / |grad f| <= tolerance scale.
+fn onto_side(
+    field: &dyn SideField,
+    region: u32,
+    mut x: Point3<f64>,
+    scale: f64,
+    tolerance: f64,
+) -> Option<Point3<f64>> {
+    for _ in 0..FACE_STEPS {
+        let (f, g) = field.side(region, &x);
+        let g2 = g.norm_squared();
+        if !(g2 > 0.0 && f.is_finite()) {
+            return None;
+        }
+        if f.abs() <= tolerance * scale * g2.sqrt() {
+            return Some(x);
+        }
+        x -= g * (f / g2);
+    }
+    None
+}
