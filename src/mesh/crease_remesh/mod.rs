@@ -39,6 +39,7 @@
 //! (p95) and its creases 1.5 % of the diagonal away.
 
 pub mod reference;
+pub mod sizing;
 
 use crate::error::{Error, Result};
 use nalgebra::{Point3, Vector3};
@@ -48,16 +49,22 @@ use std::collections::HashMap;
 /// An input crease vertex whose two crease edges turn by more than this is pinned, degrees.
 pub const PIN_TURN_DEG: f64 = 30.0;
 
+/// A Delaunay flip needs the opposite angles to exceed pi by this much, radians (no flips back
+/// and forth between cocircular vertices).
+const DELAUNAY_SLACK: f64 = 1e-3;
+
 /// No face.
 const NONE: u32 = u32::MAX;
 
 /// Edges are not split for their chord error below the target length over this.
 pub const MIN_FRACTION: f64 = 16.0;
 
-/// The length rules: split above `hi`, collapse below `lo`, and the chord error allowed.
+/// The length rules: split above 4/3 of an edge's target length, collapse below 4/5, and the
+/// chord error allowed.
 struct Rules<'a> {
-    hi: f64,
-    lo: f64,
+    target: f64,
+    /// The target length by position (`RemeshOptions::grade`), else L everywhere.
+    sizing: Option<sizing::Sizing>,
     min: f64,
     crease_tolerance: Option<f64>,
     surface_tolerance: Option<f64>,
@@ -65,6 +72,24 @@ struct Rules<'a> {
 }
 
 impl Rules<'_> {
+    /// The target length at every vertex (empty without a sizing field).
+    fn vertex_sizes(&self, s: &State) -> Vec<f64> {
+        use rayon::prelude::*;
+        match &self.sizing {
+            Some(z) => s.pos.par_iter().map(|p| z.at(p)).collect(),
+            None => Vec::new(),
+        }
+    }
+
+    /// The target length of edge (a, b): the mean of its ends' (`sizes` from
+    /// [`Self::vertex_sizes`]).
+    fn edge_target(&self, sizes: &[f64], a: u32, b: u32) -> f64 {
+        match (sizes.get(a as usize), sizes.get(b as usize)) {
+            (Some(x), Some(y)) => 0.5 * (x + y),
+            _ => self.target,
+        }
+    }
+
     /// How far the midpoint of (a, b) lies from the input: from the crease `crease` when the
     /// edge lies on one, else from the region `label`.
     fn chord_error(&self, s: &State, a: u32, b: u32, on: On) -> f64 {
@@ -109,6 +134,14 @@ pub struct RemeshOptions {
     /// The same for the edges inside a region, against its input triangles (curved faces get
     /// shorter edges; on a noisy input, many more). `None` (default).
     pub surface_tolerance: Option<f64>,
+    /// With a crease tolerance: the target length follows the creases' curvature and grows
+    /// by at most this much per unit length away from them ([`sizing`]), so that the
+    /// triangles beside a finely split crease do not fan out to the coarse surface. `None`
+    /// (default): L everywhere, the chord error alone splitting the crease edges.
+    pub grade: Option<f64>,
+    /// At the end, flip the edges inside a region that are not locally Delaunay (opposite
+    /// angles summing to more than pi), so that fewer triangles are obtuse (default false).
+    pub delaunay: bool,
 }
 
 impl RemeshOptions {
@@ -118,6 +151,8 @@ impl RemeshOptions {
             iterations: 10,
             crease_tolerance: None,
             surface_tolerance: None,
+            grade: None,
+            delaunay: false,
         }
     }
 }
@@ -341,9 +376,27 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
     }
     let reference = Reference::new(&mesh.positions, &mesh.triangles, &mesh.labels, &creases);
 
+    let sizing = match (opts.grade, opts.crease_tolerance) {
+        (Some(g), Some(t)) => {
+            let input_creases: Vec<[u32; 2]> = creases.iter().map(|c| c.0).collect();
+            let stops: Vec<bool> = (0..s.pos.len())
+                .map(|v| s.pinned[v] || topo.kind[v] != Kind::Crease)
+                .collect();
+            Some(sizing::Sizing::new(
+                &mesh.positions,
+                &input_creases,
+                &stops,
+                opts.target,
+                t,
+                g,
+                1.0 / MIN_FRACTION,
+            ))
+        }
+        _ => None,
+    };
     let rules = Rules {
-        hi: 4.0 / 3.0 * opts.target,
-        lo: 0.8 * opts.target,
+        target: opts.target,
+        sizing,
         min: opts.target / MIN_FRACTION,
         crease_tolerance: opts.crease_tolerance,
         surface_tolerance: opts.surface_tolerance,
@@ -378,6 +431,13 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
         let topo = s.topo();
         project(&mut s, &topo, &reference);
     }
+    if opts.delaunay {
+        for _ in 0..16 {
+            if flip_edges(&mut s, &rules, Flip::Delaunay) == 0 {
+                break;
+            }
+        }
+    }
     Ok(compact(&s))
 }
 
@@ -411,11 +471,15 @@ fn check_manifold(mesh: &LabelledMesh) -> Result<()> {
 /// longest first, one per triangle per pass.
 fn split_long(s: &mut State, rules: &Rules) -> usize {
     let topo = s.topo();
+    let sizes = rules.vertex_sizes(s);
     let mut long: Vec<((u32, u32), f64)> = topo
         .edges
         .iter()
         .map(|(&(a, b), fs)| ((a, b), s.len(a, b), fs))
-        .filter(|&((a, b), l, fs)| l > rules.hi || rules.too_curved(s, a, b, s.edge_on(fs)))
+        .filter(|&((a, b), l, fs)| {
+            l > 4.0 / 3.0 * rules.edge_target(&sizes, a, b)
+                || rules.too_curved(s, a, b, s.edge_on(fs))
+        })
         .map(|(e, l, _)| (e, l))
         .collect();
     long.sort_by(|x, y| y.1.total_cmp(&x.1).then(x.0.cmp(&y.0)));
@@ -451,11 +515,12 @@ fn split_long(s: &mut State, rules: &Rules) -> usize {
 /// Collapses edges shorter than 4/5 L, shortest first, where the rules of the module doc allow.
 fn collapse_short(s: &mut State, rules: &Rules) -> usize {
     let topo = s.topo();
+    let sizes = rules.vertex_sizes(s);
     let mut short: Vec<((u32, u32), f64)> = topo
         .edges
         .keys()
         .map(|&(a, b)| ((a, b), s.len(a, b)))
-        .filter(|&(_, l)| l < rules.lo)
+        .filter(|&((a, b), l)| l < 0.8 * rules.edge_target(&sizes, a, b))
         .collect();
     short.sort_by(|x, y| x.1.total_cmp(&y.1).then(x.0.cmp(&y.0)));
     let mut touched = vec![false; s.pos.len()];
@@ -473,7 +538,7 @@ fn collapse_short(s: &mut State, rules: &Rules) -> usize {
         };
         let Some((gone, kept)) = tries
             .into_iter()
-            .find(|&(g, k)| may_collapse(s, &topo, g, k, rules))
+            .find(|&(g, k)| may_collapse(s, &topo, g, k, rules, &sizes))
         else {
             continue;
         };
@@ -503,7 +568,14 @@ fn collapse_short(s: &mut State, rules: &Rules) -> usize {
 }
 
 /// Whether `gone` may collapse onto `kept` (module doc).
-fn may_collapse(s: &State, topo: &Topo, gone: u32, kept: u32, rules: &Rules) -> bool {
+fn may_collapse(
+    s: &State,
+    topo: &Topo,
+    gone: u32,
+    kept: u32,
+    rules: &Rules,
+    sizes: &[f64],
+) -> bool {
     let fs = topo.edges[&key(gone, kept)];
     let crease_edge = s.is_crease(&fs);
     match topo.kind[gone as usize] {
@@ -549,9 +621,10 @@ fn may_collapse(s: &State, topo: &Topo, gone: u32, kept: u32, rules: &Rules) -> 
         if new.dot(&old) <= cos_max_turn * new.norm() * old.norm() {
             return false;
         }
-        if t.iter()
-            .any(|&v| v != gone && (s.pos[v as usize] - pk).norm() > rules.hi)
-        {
+        if t.iter().any(|&v| {
+            v != gone
+                && (s.pos[v as usize] - pk).norm() > 4.0 / 3.0 * rules.edge_target(sizes, kept, v)
+        }) {
             return false;
         }
     }
@@ -574,6 +647,21 @@ fn may_collapse(s: &State, topo: &Topo, gone: u32, kept: u32, rules: &Rules) -> 
 /// Flips interior edges inside a region where that brings the four valences nearer their
 /// targets (6, or 4 on an open boundary), corners not counted.
 fn flip_to_valence(s: &mut State, rules: &Rules) -> usize {
+    flip_edges(s, rules, Flip::Valence)
+}
+
+/// Which edges [`flip_edges`] flips.
+#[derive(Clone, Copy, PartialEq)]
+enum Flip {
+    /// Those whose flip brings the four valences nearer their targets.
+    Valence,
+    /// Those whose two opposite angles sum to more than pi (not locally Delaunay): the
+    /// obtuse triangles that would give the quad split darts.
+    Delaunay,
+}
+
+/// Flips interior edges inside a region by the criterion `flip`, one per vertex per pass.
+fn flip_edges(s: &mut State, rules: &Rules, flip: Flip) -> usize {
     let topo = s.topo();
     let valence: Vec<i64> = (0..s.pos.len() as u32)
         .map(|v| topo.neighbours(s, v).len() as i64)
@@ -618,15 +706,27 @@ fn flip_to_valence(s: &mut State, rules: &Rules) -> usize {
         {
             continue;
         }
-        let before = deviation(a, valence[a as usize])
-            + deviation(b, valence[b as usize])
-            + deviation(c, valence[c as usize])
-            + deviation(d, valence[d as usize]);
-        let after = deviation(a, valence[a as usize] - 1)
-            + deviation(b, valence[b as usize] - 1)
-            + deviation(c, valence[c as usize] + 1)
-            + deviation(d, valence[d as usize] + 1);
-        if after >= before {
+        let wanted = match flip {
+            Flip::Valence => {
+                let before = deviation(a, valence[a as usize])
+                    + deviation(b, valence[b as usize])
+                    + deviation(c, valence[c as usize])
+                    + deviation(d, valence[d as usize]);
+                let after = deviation(a, valence[a as usize] - 1)
+                    + deviation(b, valence[b as usize] - 1)
+                    + deviation(c, valence[c as usize] + 1)
+                    + deviation(d, valence[d as usize] + 1);
+                after < before
+            }
+            Flip::Delaunay => {
+                let angle = |at: u32| {
+                    let p = s.pos[at as usize];
+                    (s.pos[a as usize] - p).angle(&(s.pos[b as usize] - p))
+                };
+                angle(c) + angle(d) > std::f64::consts::PI + DELAUNAY_SLACK
+            }
+        };
+        if !wanted {
             continue;
         }
         // f0 = (a, b, c), f1 = (b, a, d) -> (c, a, d) and (d, b, c).

@@ -297,3 +297,50 @@ fn a_round_crease_gets_edges_short_enough_for_the_tolerance() {
         }
     }
 }
+
+/// Smallest angle of a triangle, degrees.
+fn min_angle(out: &LabelledMesh, t: &[u32; 3]) -> f64 {
+    let p = t.map(|v| out.positions[v as usize]);
+    (0..3)
+        .map(|k| {
+            (p[(k + 1) % 3] - p[k])
+                .angle(&(p[(k + 2) % 3] - p[k]))
+                .to_degrees()
+        })
+        .fold(180.0, f64::min)
+}
+
+/// With the chord tolerance alone the caps' triangles fan out from the rim's short edges to
+/// the coarse cap; with the sizing field graded away from the rim (and the final Delaunay
+/// flips) they grow over a few rings: far fewer slivers, the rim as fine as before.
+#[test]
+fn graded_sizes_remove_the_fans_beside_a_finely_split_crease() {
+    let m = fine_cylinder(256);
+    let mut opts = RemeshOptions::new(0.5);
+    opts.crease_tolerance = Some(2e-3);
+    let slivers = |out: &LabelledMesh| {
+        out.triangles
+            .iter()
+            .filter(|t| min_angle(out, t) < 15.0)
+            .count()
+    };
+    let fan = remesh(&m, &opts).unwrap();
+    opts.grade = Some(0.5);
+    opts.delaunay = true;
+    let graded = remesh(&m, &opts).unwrap();
+    let (a, b) = (slivers(&fan), slivers(&graded));
+    assert!(a > 20 && b * 5 < a, "slivers {a} -> {b}");
+    assert!(
+        graded.triangles.len() < 4 * fan.triangles.len(),
+        "{} -> {}",
+        fan.triangles.len(),
+        graded.triangles.len()
+    );
+    // The rim keeps its chord tolerance.
+    for t in &graded.triangles {
+        for &v in t {
+            let p = graded.positions[v as usize];
+            assert!(p.z.abs() < 1e-12 || (p.z - 1.0).abs() < 1e-12 || p.coords.xy().norm() > 0.99);
+        }
+    }
+}
