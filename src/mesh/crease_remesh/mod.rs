@@ -14,7 +14,10 @@
 //! rather than estimated from curvature): an edge whose midpoint lies farther than a tolerance
 //! from the input (the input crease, for a crease edge) is split, and no collapse or flip makes
 //! one. A circular crease of radius R then gets edges of about sqrt(8 R tolerance), the
-//! sagitta L^2 / (8 R) being the chord error.
+//! sagitta L^2 / (8 R) being the chord error. With a grade as well, the target length itself
+//! varies: short along curved creases and growing gradually away from them ([`sizing`]), so
+//! that the triangles beside such a crease do not fan out to the coarse surface; and the
+//! remesh can end with flips to locally Delaunay triangles inside the regions ([`flips`]).
 //!
 //! The creases are given, not guessed from angles: every triangle carries the region label of
 //! the input's segmentation, and an edge between two regions (or on an open boundary) is a
@@ -38,6 +41,8 @@
 //! 30 degrees) on make_parts' exact block.stl at a 7 mm target left its faces 13 degrees off
 //! (p95) and its creases 1.5 % of the diagonal away.
 
+mod flips;
+use flips::{flip_edges, flip_to_valence, Flip};
 pub mod reference;
 pub mod sizing;
 
@@ -48,10 +53,6 @@ use std::collections::HashMap;
 
 /// An input crease vertex whose two crease edges turn by more than this is pinned, degrees.
 pub const PIN_TURN_DEG: f64 = 30.0;
-
-/// A Delaunay flip needs the opposite angles to exceed pi by this much, radians (no flips back
-/// and forth between cocircular vertices).
-const DELAUNAY_SLACK: f64 = 1e-3;
 
 /// No face.
 const NONE: u32 = u32::MAX;
@@ -642,113 +643,6 @@ fn may_collapse(
         }
     }
     true
-}
-
-/// Flips interior edges inside a region where that brings the four valences nearer their
-/// targets (6, or 4 on an open boundary), corners not counted.
-fn flip_to_valence(s: &mut State, rules: &Rules) -> usize {
-    flip_edges(s, rules, Flip::Valence)
-}
-
-/// Which edges [`flip_edges`] flips.
-#[derive(Clone, Copy, PartialEq)]
-enum Flip {
-    /// Those whose flip brings the four valences nearer their targets.
-    Valence,
-    /// Those whose two opposite angles sum to more than pi (not locally Delaunay): the
-    /// obtuse triangles that would give the quad split darts.
-    Delaunay,
-}
-
-/// Flips interior edges inside a region by the criterion `flip`, one per vertex per pass.
-fn flip_edges(s: &mut State, rules: &Rules, flip: Flip) -> usize {
-    let topo = s.topo();
-    let valence: Vec<i64> = (0..s.pos.len() as u32)
-        .map(|v| topo.neighbours(s, v).len() as i64)
-        .collect();
-    let mut open = vec![false; s.pos.len()];
-    for (&(a, b), fs) in &topo.edges {
-        if fs[1] == NONE {
-            open[a as usize] = true;
-            open[b as usize] = true;
-        }
-    }
-    let deviation = |v: u32, val: i64| -> i64 {
-        if topo.kind[v as usize] == Kind::Corner {
-            0
-        } else {
-            (val - if open[v as usize] { 4 } else { 6 }).abs()
-        }
-    };
-    let mut edges: Vec<(u32, u32)> = topo.edges.keys().copied().collect();
-    edges.sort_unstable();
-    let mut touched = vec![false; s.pos.len()];
-    let mut count = 0;
-    for (a, b) in edges {
-        let fs = topo.edges[&(a, b)];
-        if s.is_crease(&fs) || [a, b].iter().any(|&v| touched[v as usize]) {
-            continue;
-        }
-        // Orient: f0 walks a -> b.
-        let t0 = s.tris[fs[0] as usize];
-        let walks = (0..3).any(|i| t0[i] == a && t0[(i + 1) % 3] == b);
-        let (f0, f1) = if walks {
-            (fs[0], fs[1])
-        } else {
-            (fs[1], fs[0])
-        };
-        let c = s.opposite(f0, a, b);
-        let d = s.opposite(f1, a, b);
-        if c == d
-            || touched[c as usize]
-            || touched[d as usize]
-            || topo.edges.contains_key(&key(c, d))
-        {
-            continue;
-        }
-        let wanted = match flip {
-            Flip::Valence => {
-                let before = deviation(a, valence[a as usize])
-                    + deviation(b, valence[b as usize])
-                    + deviation(c, valence[c as usize])
-                    + deviation(d, valence[d as usize]);
-                let after = deviation(a, valence[a as usize] - 1)
-                    + deviation(b, valence[b as usize] - 1)
-                    + deviation(c, valence[c as usize] + 1)
-                    + deviation(d, valence[d as usize] + 1);
-                after < before
-            }
-            Flip::Delaunay => {
-                let angle = |at: u32| {
-                    let p = s.pos[at as usize];
-                    (s.pos[a as usize] - p).angle(&(s.pos[b as usize] - p))
-                };
-                angle(c) + angle(d) > std::f64::consts::PI + DELAUNAY_SLACK
-            }
-        };
-        if !wanted {
-            continue;
-        }
-        // f0 = (a, b, c), f1 = (b, a, d) -> (c, a, d) and (d, b, c).
-        let (n0, n1) = ([c, a, d], [d, b, c]);
-        let old = (s.normal(&s.tris[f0 as usize]).normalize()
-            + s.normal(&s.tris[f1 as usize]).normalize())
-        .normalize();
-        let ok = [n0, n1].iter().all(|t| {
-            let n = s.normal(t);
-            n.norm() > 0.0 && n.dot(&old) > 0.9 * n.norm()
-        });
-        if !ok || rules.too_curved(s, c, d, On::Region(s.labels[f0 as usize])) {
-            continue;
-        }
-        s.tris[f0 as usize] = n0;
-        s.tris[f1 as usize] = n1;
-        for v in [a, b, c, d] {
-            touched[v as usize] = true;
-        }
-        count += 1;
-    }
-    count
 }
 
 /// Tangential relaxation: a smooth vertex towards the area-weighted centroid of its triangles'
