@@ -110,6 +110,32 @@ pub fn remeshed(inputs: &RemeshInputs) -> Result<RemeshNet> {
     )
 }
 
+/// Drops the triangles around every vertex where the cut left two sheets touching (more than
+/// two boundary edges meet there), until there is none: the remesh and the quad net need a
+/// 2-manifold with boundary.
+fn drop_pinches(faces: &mut Vec<[u32; 3]>, vertices: usize) {
+    loop {
+        let mut directed = std::collections::HashSet::new();
+        for t in faces.iter() {
+            for k in 0..3 {
+                directed.insert((t[k], t[(k + 1) % 3]));
+            }
+        }
+        let mut boundary = vec![0usize; vertices];
+        for &(a, b) in &directed {
+            if !directed.contains(&(b, a)) {
+                boundary[a as usize] += 1;
+                boundary[b as usize] += 1;
+            }
+        }
+        let before = faces.len();
+        faces.retain(|t| t.iter().all(|&v| boundary[v as usize] <= 2));
+        if faces.len() == before {
+            return;
+        }
+    }
+}
+
 /// The triangles of `mesh` whose three vertices lie within `r` of a point of `tree`, with the
 /// vertices they use.
 fn supported(mesh: &Mesh, tree: &KdTree, r: f64) -> Mesh {
@@ -118,12 +144,13 @@ fn supported(mesh: &Mesh, tree: &KdTree, r: f64) -> Mesh {
         .iter()
         .map(|p| tree.nearest(p).1 <= r)
         .collect();
-    let faces: Vec<[u32; 3]> = mesh
+    let mut faces: Vec<[u32; 3]> = mesh
         .faces
         .iter()
         .filter(|t| t.iter().all(|&v| near[v as usize]))
         .copied()
         .collect();
+    drop_pinches(&mut faces, mesh.positions.len());
     let mut index = vec![u32::MAX; mesh.positions.len()];
     let mut positions = Vec::new();
     let faces = faces
@@ -142,5 +169,27 @@ fn supported(mesh: &Mesh, tree: &KdTree, r: f64) -> Mesh {
         positions,
         normals: None,
         faces,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two triangles touching at one vertex are a pinch and go; a fan around it stays.
+    #[test]
+    fn pinched_sheets_are_dropped_and_a_fan_kept() {
+        let mut bowtie = vec![[0, 1, 2], [0, 3, 4]];
+        drop_pinches(&mut bowtie, 5);
+        assert!(bowtie.is_empty());
+        let fan = vec![[0, 1, 2], [0, 2, 3], [0, 3, 4]];
+        let mut kept = fan.clone();
+        drop_pinches(&mut kept, 5);
+        assert_eq!(kept, fan);
+        // The fan plus a triangle touching its apex only: that one and the fan around the
+        // apex go (the apex keeps four boundary edges until both sheets are gone).
+        let mut mixed = vec![[0, 1, 2], [0, 2, 3], [0, 5, 6], [1, 7, 2]];
+        drop_pinches(&mut mixed, 8);
+        assert!(!mixed.contains(&[0, 5, 6]), "{mixed:?}");
     }
 }
