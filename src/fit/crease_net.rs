@@ -2,16 +2,17 @@
 //! routes ([`CreaseNetRoute`]).
 //!
 //! The remesh route (default): the sharp implicit's zero set is meshed as `reconstruct` does
-//! ([`crate::reconstruct::surface_mesh`]: marching cubes, relaxation, subdivision to the
-//! tolerance, the triangles across a crease split where its two sides meet), an open fit keeps
-//! the triangles near the data only, and the mesh becomes a quad net with its edges on the
-//! creases ([`crate::polygonize::remesh_net`]). The voxel route puts the voxel net's nodes on
+//! ([`crate::reconstruct::surface_mesh`]: marching cubes, relaxation, the triangles across a
+//! crease split where its two sides meet; no subdivision, [`SURFACE_SUBDIVISIONS`]), an open
+//! fit keeps the triangles near the data only (less those where two sheets touch), and the
+//! mesh becomes a quad net with its edges on the creases ([`crate::polygonize::remesh_net`]). The voxel route puts the voxel net's nodes on
 //! the creases ([`crate::polygonize::crease_nodes`]); it cannot follow a crease at an angle to
 //! its grid (docs/BENCHMARKS.md: crease max about 1e-2 of the diagonal against 2e-4 to 1e-3).
 
 use crate::features::sharp_field::SharpField;
 use crate::implicit::PouImplicit;
 use crate::mesh::Mesh;
+use crate::polygonize::quad_net::QuadNet;
 use crate::polygonize::remesh_net::{remesh_net, RemeshNet, RemeshNetOptions};
 use crate::reconstruct::{surface_mesh, ReconstructOptions, Timings};
 use crate::spatial::KdTree;
@@ -38,24 +39,20 @@ pub enum CreaseNetRoute {
 /// The crease-aligned net of `--sharp`, by the route that built it.
 pub enum CreaseNet {
     /// The voxel net, its nodes placed, and the segmentation's region count.
-    Placed(
-        crate::polygonize::crease_nodes::CreaseNet,
-        crate::polygonize::quad_net::QuadNet,
-        usize,
-    ),
+    Placed(crate::polygonize::crease_nodes::CreaseNet, QuadNet, usize),
     Remeshed(crate::polygonize::remesh_net::RemeshNet),
 }
 
 impl CreaseNet {
     /// The net, its quads' regions and the number of regions.
-    pub fn labelled(&self) -> (&crate::polygonize::quad_net::QuadNet, &[u32], usize) {
+    pub fn labelled(&self) -> (&QuadNet, &[u32], usize) {
         match self {
             CreaseNet::Placed(p, net, regions) => (net, &p.quad_region, *regions),
             CreaseNet::Remeshed(r) => (&r.net, &r.quad_region, r.report.regions),
         }
     }
 
-    pub fn into_net(self) -> crate::polygonize::quad_net::QuadNet {
+    pub fn into_net(self) -> QuadNet {
         match self {
             CreaseNet::Placed(_, net, _) => net,
             CreaseNet::Remeshed(r) => r.net,
