@@ -11,6 +11,7 @@
 
 use crate::features::sharp_field::SharpField;
 use crate::implicit::PouImplicit;
+use crate::mesh::retain::retain_faces;
 use crate::mesh::Mesh;
 use crate::polygonize::quad_net::QuadNet;
 use crate::polygonize::remesh_net::{remesh_net, RemeshNet, RemeshNetOptions};
@@ -107,13 +108,13 @@ pub fn remeshed(inputs: &RemeshInputs) -> Result<RemeshNet> {
     )
 }
 
-/// Drops the triangles around every vertex where the cut left two sheets touching (more than
-/// two boundary edges meet there), until there is none: the remesh and the quad net need a
-/// 2-manifold with boundary.
-fn drop_pinches(faces: &mut Vec<[u32; 3]>, vertices: usize) {
+/// Unmarks (`keep`) the triangles of `faces` around every vertex where the kept ones leave two
+/// sheets touching (more than two boundary edges meet there), until there is none: the remesh
+/// and the quad net need a 2-manifold with boundary.
+fn drop_pinches(faces: &[[u32; 3]], keep: &mut [bool], vertices: usize) {
     loop {
         let mut directed = std::collections::HashSet::new();
-        for t in faces.iter() {
+        for (t, _) in faces.iter().zip(keep.iter()).filter(|x| *x.1) {
             for k in 0..3 {
                 directed.insert((t[k], t[(k + 1) % 3]));
             }
@@ -125,48 +126,34 @@ fn drop_pinches(faces: &mut Vec<[u32; 3]>, vertices: usize) {
                 boundary[b as usize] += 1;
             }
         }
-        let before = faces.len();
-        faces.retain(|t| t.iter().all(|&v| boundary[v as usize] <= 2));
-        if faces.len() == before {
+        let mut dropped = false;
+        for (t, k) in faces.iter().zip(keep.iter_mut()) {
+            if *k && t.iter().any(|&v| boundary[v as usize] > 2) {
+                *k = false;
+                dropped = true;
+            }
+        }
+        if !dropped {
             return;
         }
     }
 }
 
-/// The triangles of `mesh` whose three vertices lie within `r` of a point of `tree`, with the
-/// vertices they use.
+/// The triangles of `mesh` whose three vertices lie within `r` of a point of `tree` (less the
+/// pinches, [`drop_pinches`]), with the vertices they use.
 fn supported(mesh: &Mesh, tree: &KdTree, r: f64) -> Mesh {
     let near: Vec<bool> = mesh
         .positions
         .iter()
         .map(|p| tree.nearest(p).1 <= r)
         .collect();
-    let mut faces: Vec<[u32; 3]> = mesh
+    let mut keep: Vec<bool> = mesh
         .faces
         .iter()
-        .filter(|t| t.iter().all(|&v| near[v as usize]))
-        .copied()
+        .map(|t| t.iter().all(|&v| near[v as usize]))
         .collect();
-    drop_pinches(&mut faces, mesh.positions.len());
-    let mut index = vec![u32::MAX; mesh.positions.len()];
-    let mut positions = Vec::new();
-    let faces = faces
-        .into_iter()
-        .map(|t| {
-            t.map(|v| {
-                if index[v as usize] == u32::MAX {
-                    index[v as usize] = positions.len() as u32;
-                    positions.push(mesh.positions[v as usize]);
-                }
-                index[v as usize]
-            })
-        })
-        .collect();
-    Mesh {
-        positions,
-        normals: None,
-        faces,
-    }
+    drop_pinches(&mesh.faces, &mut keep, mesh.positions.len());
+    retain_faces(mesh, &keep)
 }
 
 #[cfg(test)]
@@ -176,17 +163,22 @@ mod tests {
     /// Two triangles touching at one vertex are a pinch and go; a fan around it stays.
     #[test]
     fn pinched_sheets_are_dropped_and_a_fan_kept() {
-        let mut bowtie = vec![[0, 1, 2], [0, 3, 4]];
-        drop_pinches(&mut bowtie, 5);
-        assert!(bowtie.is_empty());
+        let kept = |faces: &[[u32; 3]], vertices: usize| -> Vec<[u32; 3]> {
+            let mut keep = vec![true; faces.len()];
+            drop_pinches(faces, &mut keep, vertices);
+            faces
+                .iter()
+                .zip(&keep)
+                .filter(|x| *x.1)
+                .map(|x| *x.0)
+                .collect()
+        };
+        assert!(kept(&[[0, 1, 2], [0, 3, 4]], 5).is_empty());
         let fan = vec![[0, 1, 2], [0, 2, 3], [0, 3, 4]];
-        let mut kept = fan.clone();
-        drop_pinches(&mut kept, 5);
-        assert_eq!(kept, fan);
+        assert_eq!(kept(&fan, 5), fan);
         // The fan plus a triangle touching its apex only: that one and the fan around the
         // apex go (the apex keeps four boundary edges until both sheets are gone).
-        let mut mixed = vec![[0, 1, 2], [0, 2, 3], [0, 5, 6], [1, 7, 2]];
-        drop_pinches(&mut mixed, 8);
+        let mixed = kept(&[[0, 1, 2], [0, 2, 3], [0, 5, 6], [1, 7, 2]], 8);
         assert!(!mixed.contains(&[0, 5, 6]), "{mixed:?}");
     }
 }

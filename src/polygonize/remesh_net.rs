@@ -112,14 +112,7 @@ pub fn remesh_net<I: Implicit + ?Sized>(
     opts: &RemeshNetOptions,
 ) -> Result<RemeshNet> {
     let seg = crate::features::segment_mesh::segment_mesh(mesh, &Default::default())?;
-    let area: f64 = mesh
-        .faces
-        .iter()
-        .map(|t| {
-            let [p, q, r] = t.map(|v| mesh.positions[v as usize]);
-            (q - p).cross(&(r - p)).norm() / 2.0
-        })
-        .sum();
+    let area: f64 = (0..mesh.faces.len()).map(|f| mesh.face_area(f)).sum();
     let per_triangle = 3f64.sqrt() / 4.0;
     let target = (3.0 * area / (per_triangle * opts.quads.max(1) as f64)).sqrt();
     let mut ro = RemeshOptions::new(target);
@@ -130,7 +123,7 @@ pub fn remesh_net<I: Implicit + ?Sized>(
     let labelled = LabelledMesh {
         positions: mesh.positions.clone(),
         triangles: mesh.faces.clone(),
-        labels: seg.face_label.clone(),
+        labels: seg.face_label,
     };
     let out = remesh(&labelled, &ro)?;
     let polygons: Vec<Vec<u32>> = out.triangles.iter().map(|t| t.to_vec()).collect();
