@@ -73,19 +73,18 @@ struct Rules<'a> {
 }
 
 impl Rules<'_> {
-    /// The target length at every vertex (empty without a sizing field).
-    fn vertex_sizes(&self, s: &State) -> Vec<f64> {
+    /// Sets the target length of every vertex (`State::size`; left empty without a sizing
+    /// field). Only relaxation and projection move vertices: called after them.
+    fn refresh_sizes(&self, s: &mut State) {
         use rayon::prelude::*;
-        match &self.sizing {
-            Some(z) => s.pos.par_iter().map(|p| z.at(p)).collect(),
-            None => Vec::new(),
+        if let Some(z) = &self.sizing {
+            s.size = s.pos.par_iter().map(|p| z.at(p)).collect();
         }
     }
 
-    /// The target length of edge (a, b): the mean of its ends' (`sizes` from
-    /// [`Self::vertex_sizes`]).
-    fn edge_target(&self, sizes: &[f64], a: u32, b: u32) -> f64 {
-        match (sizes.get(a as usize), sizes.get(b as usize)) {
+    /// The target length of edge (a, b): the mean of its ends' ([`State::size`]).
+    fn edge_target(&self, s: &State, a: u32, b: u32) -> f64 {
+        match (s.size.get(a as usize), s.size.get(b as usize)) {
             (Some(x), Some(y)) => 0.5 * (x + y),
             _ => self.target,
         }
@@ -181,6 +180,8 @@ struct State {
     labels: Vec<u32>,
     alive: Vec<bool>,
     pinned: Vec<bool>,
+    /// Target length per vertex with a sizing field ([`Rules::refresh_sizes`]), else empty.
+    size: Vec<f64>,
 }
 
 /// Adjacency of the live triangles, rebuilt before every pass.
@@ -350,6 +351,7 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
         labels: mesh.labels.clone(),
         alive: vec![true; mesh.triangles.len()],
         pinned: vec![false; mesh.positions.len()],
+        size: Vec::new(),
     };
     // The input's creases (projection targets) and its pinned turns.
     let topo = s.topo();
@@ -403,6 +405,7 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
         surface_tolerance: opts.surface_tolerance,
         reference: &reference,
     };
+    rules.refresh_sizes(&mut s);
     for _ in 0..opts.iterations {
         for _ in 0..16 {
             if split_long(&mut s, &rules) == 0 {
@@ -423,6 +426,7 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
         let topo = s.topo();
         relax(&mut s, &topo);
         project(&mut s, &topo, &reference);
+        rules.refresh_sizes(&mut s);
     }
     // The relaxation stretches a few edges past 4/3 L again: split those, onto the input.
     for _ in 0..16 {
@@ -431,6 +435,7 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
         }
         let topo = s.topo();
         project(&mut s, &topo, &reference);
+        rules.refresh_sizes(&mut s);
     }
     if opts.delaunay {
         for _ in 0..16 {
@@ -472,14 +477,12 @@ fn check_manifold(mesh: &LabelledMesh) -> Result<()> {
 /// longest first, one per triangle per pass.
 fn split_long(s: &mut State, rules: &Rules) -> usize {
     let topo = s.topo();
-    let sizes = rules.vertex_sizes(s);
     let mut long: Vec<((u32, u32), f64)> = topo
         .edges
         .iter()
         .map(|(&(a, b), fs)| ((a, b), s.len(a, b), fs))
         .filter(|&((a, b), l, fs)| {
-            l > 4.0 / 3.0 * rules.edge_target(&sizes, a, b)
-                || rules.too_curved(s, a, b, s.edge_on(fs))
+            l > 4.0 / 3.0 * rules.edge_target(s, a, b) || rules.too_curved(s, a, b, s.edge_on(fs))
         })
         .map(|(e, l, _)| (e, l))
         .collect();
@@ -493,9 +496,12 @@ fn split_long(s: &mut State, rules: &Rules) -> usize {
             continue;
         }
         let m = s.pos.len() as u32;
-        s.pos
-            .push(nalgebra::center(&s.pos[a as usize], &s.pos[b as usize]));
+        let mid = nalgebra::center(&s.pos[a as usize], &s.pos[b as usize]);
+        s.pos.push(mid);
         s.pinned.push(false);
+        if let Some(z) = &rules.sizing {
+            s.size.push(z.at(&mid));
+        }
         for f in fs {
             let t = s.tris[f as usize];
             let i = (0..3)
@@ -516,12 +522,11 @@ fn split_long(s: &mut State, rules: &Rules) -> usize {
 /// Collapses edges shorter than 4/5 L, shortest first, where the rules of the module doc allow.
 fn collapse_short(s: &mut State, rules: &Rules) -> usize {
     let topo = s.topo();
-    let sizes = rules.vertex_sizes(s);
     let mut short: Vec<((u32, u32), f64)> = topo
         .edges
         .keys()
         .map(|&(a, b)| ((a, b), s.len(a, b)))
-        .filter(|&((a, b), l)| l < 0.8 * rules.edge_target(&sizes, a, b))
+        .filter(|&((a, b), l)| l < 0.8 * rules.edge_target(s, a, b))
         .collect();
     short.sort_by(|x, y| x.1.total_cmp(&y.1).then(x.0.cmp(&y.0)));
     let mut touched = vec![false; s.pos.len()];
@@ -539,7 +544,7 @@ fn collapse_short(s: &mut State, rules: &Rules) -> usize {
         };
         let Some((gone, kept)) = tries
             .into_iter()
-            .find(|&(g, k)| may_collapse(s, &topo, g, k, rules, &sizes))
+            .find(|&(g, k)| may_collapse(s, &topo, g, k, rules))
         else {
             continue;
         };
@@ -569,14 +574,7 @@ fn collapse_short(s: &mut State, rules: &Rules) -> usize {
 }
 
 /// Whether `gone` may collapse onto `kept` (module doc).
-fn may_collapse(
-    s: &State,
-    topo: &Topo,
-    gone: u32,
-    kept: u32,
-    rules: &Rules,
-    sizes: &[f64],
-) -> bool {
+fn may_collapse(s: &State, topo: &Topo, gone: u32, kept: u32, rules: &Rules) -> bool {
     let fs = topo.edges[&key(gone, kept)];
     let crease_edge = s.is_crease(&fs);
     match topo.kind[gone as usize] {
@@ -623,8 +621,7 @@ fn may_collapse(
             return false;
         }
         if t.iter().any(|&v| {
-            v != gone
-                && (s.pos[v as usize] - pk).norm() > 4.0 / 3.0 * rules.edge_target(sizes, kept, v)
+            v != gone && (s.pos[v as usize] - pk).norm() > 4.0 / 3.0 * rules.edge_target(s, kept, v)
         }) {
             return false;
         }
