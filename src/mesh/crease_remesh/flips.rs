@@ -1,8 +1,17 @@
 //! Edge flips inside a region: towards valence 6 (4 on an open boundary) during the
-//! remeshing, and to locally Delaunay triangles at its end. A crease edge is never flipped, and
-//! no flip turns a triangle by more than about 25 degrees from the pair's mean normal.
+//! remeshing, and to locally Delaunay triangles and without ears at its end. A crease edge is
+//! never flipped, and no flip turns a triangle by more than about 25 degrees from the pair's
+//! mean normal (from the other triangle's normal, for an ear).
+//!
+//! An *ear* is a triangle (x, a, b) whose two edges at x lie on the same crease, x being a
+//! crease vertex (not a corner): the crease runs a - x - b, and the triangle spans the sliver
+//! between the crease and its chord a - b, with an angle near 180 degrees at x on a straight
+//! or gently curved crease (zero area, or turned inside out where the crease curves away from
+//! the region). Its quads (`polygonize::quad_split`) have three corners on the crease and fold.
+//! Flipping the chord a - b to x - d (d the vertex across it) replaces it with two triangles
+//! that each have one crease edge.
 
-use super::{key, Kind, On, Rules, State, NONE};
+use super::{key, Kind, On, Rules, State, Topo, NONE};
 
 /// A Delaunay flip needs the opposite angles to exceed pi by this much, radians (no flips back
 /// and forth between cocircular vertices).
@@ -22,6 +31,8 @@ pub(super) enum Flip {
     /// Those whose two opposite angles sum to more than pi (not locally Delaunay): the
     /// obtuse triangles that would give the quad split darts.
     Delaunay,
+    /// The chords of ears (module doc).
+    Ear,
 }
 
 /// Flips interior edges inside a region by the criterion `flip`, one per vertex per pass.
@@ -89,15 +100,22 @@ pub(super) fn flip_edges(s: &mut State, rules: &Rules, flip: Flip) -> usize {
                 };
                 angle(c) + angle(d) > std::f64::consts::PI + DELAUNAY_SLACK
             }
+            // Exactly one of the two an ear: two ears across a chord would join two crease
+            // vertices across their region.
+            Flip::Ear => is_ear(s, &topo, c, a, b) != is_ear(s, &topo, d, a, b),
         };
         if !wanted {
             continue;
         }
         // f0 = (a, b, c), f1 = (b, a, d) -> (c, a, d) and (d, b, c).
         let (n0, n1) = ([c, a, d], [d, b, c]);
-        let old = (s.normal(&s.tris[f0 as usize]).normalize()
-            + s.normal(&s.tris[f1 as usize]).normalize())
-        .normalize();
+        let unit = |f: u32| s.normal(&s.tris[f as usize]).normalize();
+        let old = match flip {
+            // An ear's own normal is no guide (a sliver, perhaps inside out).
+            Flip::Ear if is_ear(s, &topo, c, a, b) => unit(f1),
+            Flip::Ear => unit(f0),
+            _ => (unit(f0) + unit(f1)).normalize(),
+        };
         let ok = [n0, n1].iter().all(|t| {
             let n = s.normal(t);
             n.norm() > 0.0 && n.dot(&old) > 0.9 * n.norm()
@@ -113,4 +131,22 @@ pub(super) fn flip_edges(s: &mut State, rules: &Rules, flip: Flip) -> usize {
         count += 1;
     }
     count
+}
+
+/// Whether the triangle (x, a, b) is an ear at x (module doc): x a crease vertex whose edges to
+/// a and to b both lie on its crease.
+fn is_ear(s: &State, topo: &Topo, x: u32, a: u32, b: u32) -> bool {
+    if topo.kind[x as usize] != Kind::Crease {
+        return false;
+    }
+    let on = |w: u32| {
+        topo.edges
+            .get(&key(x, w))
+            .filter(|fs| s.is_crease(fs))
+            .map(|fs| match s.edge_on(fs) {
+                On::Crease(k) => k,
+                On::Region(l) => (l, l),
+            })
+    };
+    matches!((on(a), on(b)), (Some(p), Some(q)) if p == q)
 }

@@ -18,12 +18,14 @@
 //! varies: short along curved creases and growing gradually away from them ([`sizing`]), so
 //! that the triangles beside such a crease do not fan out to the coarse surface; and the
 //! remesh can end with flips to locally Delaunay triangles inside the regions ([`flips`]).
+//! It always ends by flipping away the *ears*, slivers between a crease and its chord
+//! ([`flips`]), which the relaxation along a curved crease can leave.
 //!
 //! The creases are given, not guessed from angles: every triangle carries the region label of
 //! the input's segmentation, and an edge between two regions (or on an open boundary) is a
 //! crease edge. A vertex with no crease edge is *smooth*, with two a *crease* vertex, and with
 //! one or three or more (or where three regions meet, or where the input's crease turns by more
-//! than [`PIN_TURN_DEG`]) a *corner*, pinned. The operations keep this structure:
+//! than [`PIN_TURN_DEG`] over a few edges) a *corner*, pinned. The operations keep this structure:
 //! - splitting a crease edge gives a crease vertex (the triangles keep their labels);
 //! - a corner is never collapsed; a crease vertex only along one of its crease edges onto a
 //!   crease vertex or a corner (so the crease stays a path of edges, shortened along itself);
@@ -51,8 +53,12 @@ use nalgebra::{Point3, Vector3};
 use reference::{crease_key, Reference, OPEN};
 use std::collections::HashMap;
 
-/// An input crease vertex whose two crease edges turn by more than this is pinned, degrees.
+/// An input crease vertex where its crease turns by more than this is pinned, degrees
+/// (measured over [`TURN_SCALE`] crease edges each way: [`crease_turns`]).
 pub const PIN_TURN_DEG: f64 = 30.0;
+
+/// The length over which a crease's turn is measured, in mean input crease edges.
+pub const TURN_SCALE: f64 = 3.0;
 
 /// No face.
 const NONE: u32 = u32::MAX;
@@ -366,16 +372,9 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
             creases.push(([a, b], crease_key(s.labels[fs[0] as usize], other)));
         }
     }
-    let cos_turn = PIN_TURN_DEG.to_radians().cos();
-    for v in 0..s.pos.len() as u32 {
-        if topo.kind[v as usize] == Kind::Crease {
-            let c = topo.crease_neighbours(&s, v);
-            let p = s.pos[v as usize];
-            let (d0, d1) = (p - s.pos[c[0] as usize], s.pos[c[1] as usize] - p);
-            if d0.dot(&d1) < cos_turn * d0.norm() * d1.norm() {
-                s.pinned[v as usize] = true;
-            }
-        }
+    let pins = crease_turns(&s, &topo, creases.iter().map(|c| c.0));
+    for v in pins {
+        s.pinned[v as usize] = true;
     }
     let reference = Reference::new(&mesh.positions, &mesh.triangles, &mesh.labels, &creases);
 
@@ -444,7 +443,62 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
             }
         }
     }
+    for _ in 0..16 {
+        if flip_edges(&mut s, &rules, Flip::Ear) == 0 {
+            break;
+        }
+    }
     Ok(compact(&s))
+}
+
+/// The input's crease vertices where their crease turns by more than [`PIN_TURN_DEG`], on the
+/// scale of [`TURN_SCALE`] mean crease edges: the angle between the chords from the crease
+/// points that far back along the crease to the vertex and from it to the point that far on
+/// (or to the crease's end, a corner, if nearer). A corner of a crease turns at every scale;
+/// the zigzag of an extracted crease (a vertex a tenth of a voxel off a straight edge turns its
+/// two short edges by tens of degrees) only at the scale of its edges, and pinned it would stay
+/// for good, with its slivers.
+fn crease_turns(s: &State, topo: &Topo, crease_edges: impl Iterator<Item = [u32; 2]>) -> Vec<u32> {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for [a, b] in crease_edges {
+        sum += s.len(a, b);
+        n += 1;
+    }
+    if n == 0 {
+        return Vec::new();
+    }
+    let scale = TURN_SCALE * sum / n as f64;
+    // The point `scale` from v walking away from `prev` through `next` (or the last one).
+    let walk = |v: u32, first: u32| -> Point3<f64> {
+        let p = s.pos[v as usize];
+        let (mut prev, mut cur) = (v, first);
+        for _ in 0..64 {
+            if (s.pos[cur as usize] - p).norm() >= scale
+                || topo.kind[cur as usize] != Kind::Crease
+                || cur == v
+            {
+                break;
+            }
+            let c = topo.crease_neighbours(s, cur);
+            let Some(&next) = c.iter().find(|&&w| w != prev) else {
+                break;
+            };
+            (prev, cur) = (cur, next);
+        }
+        s.pos[cur as usize]
+    };
+    let cos_turn = PIN_TURN_DEG.to_radians().cos();
+    (0..s.pos.len() as u32)
+        .filter(|&v| {
+            if topo.kind[v as usize] != Kind::Crease {
+                return false;
+            }
+            let c = topo.crease_neighbours(s, v);
+            let p = s.pos[v as usize];
+            let (d0, d1) = (p - walk(v, c[0]), walk(v, c[1]) - p);
+            d0.dot(&d1) < cos_turn * d0.norm() * d1.norm()
+        })
+        .collect()
 }
 
 /// The remeshing needs an edge-manifold, consistently oriented mesh of proper triangles:

@@ -344,3 +344,95 @@ fn graded_sizes_remove_the_fans_beside_a_finely_split_crease() {
         }
     }
 }
+
+/// The ears of `m` (module `flips`): triangles with two edges on the same crease at a vertex
+/// between two regions only.
+fn ears(m: &LabelledMesh) -> usize {
+    let e = edges(m);
+    let mut regions: Vec<Vec<u32>> = vec![Vec::new(); m.positions.len()];
+    for (t, &l) in m.triangles.iter().zip(&m.labels) {
+        for &v in t {
+            if !regions[v as usize].contains(&l) {
+                regions[v as usize].push(l);
+            }
+        }
+    }
+    let crease = |a: u32, b: u32| {
+        e.get(&key(a, b)).and_then(|fs| {
+            let (l0, l1) = (m.labels[fs[0] as usize], m.labels[*fs.get(1)? as usize]);
+            (l0 != l1).then_some((l0.min(l1), l0.max(l1)))
+        })
+    };
+    m.triangles
+        .iter()
+        .filter(|t| {
+            (0..3).any(|i| {
+                let (x, a, b) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
+                regions[x as usize].len() == 2
+                    && crease(x, a).is_some()
+                    && crease(x, a) == crease(x, b)
+            })
+        })
+        .count()
+}
+
+/// An extracted crease zigzags: every other vertex on the cube's edges pushed a third of an
+/// edge into one face, so that its two crease edges turn by 37 degrees. Those turns are not
+/// corners: the remesh straightens the creases (no input zigzag vertex stays where it was,
+/// as a pinned one would) and leaves no ear.
+#[test]
+fn a_zigzag_crease_is_not_pinned_and_leaves_no_ears() {
+    let n = 24;
+    let mut m = fine_cube(n);
+    let delta = 0.35 / n as f64;
+    let mut moved = Vec::new();
+    for p in m.positions.iter_mut() {
+        let on: Vec<usize> = (0..3)
+            .filter(|&k| p[k].abs() < 1e-9 || (p[k] - 1.0).abs() < 1e-9)
+            .collect();
+        if on.len() != 2 {
+            continue;
+        }
+        let along = (0..3).find(|k| !on.contains(k)).unwrap_or(0);
+        if (p[along] * n as f64).round() as usize % 2 == 1 {
+            let k = on[0];
+            p[k] += if p[k] < 0.5 { delta } else { -delta };
+            moved.push(*p);
+        }
+    }
+    assert_eq!(moved.len(), 12 * n / 2);
+    // The plain remesh's ears were of this kind; with the zigzag vertices pinned (turns
+    // measured edge by edge), 144 of them would stay put.
+    let out = remesh(&m, &RemeshOptions::new(0.2)).unwrap();
+    let stayed = out
+        .positions
+        .iter()
+        .filter(|p| moved.iter().any(|q| (*p - q).norm() < 1e-12))
+        .count();
+    assert_eq!(stayed, 0);
+    assert_eq!(ears(&out), 0);
+    // The corners stay, and the creases stay within the zigzag's width of the true edges.
+    let e = edges(&out);
+    for (&(a, b), fs) in &e {
+        if out.labels[fs[0] as usize] != out.labels[fs[1] as usize] {
+            for v in [a, b] {
+                let p = out.positions[v as usize];
+                let off = (0..3).map(|k| p[k].min(1.0 - p[k]).abs()).fold(
+                    [f64::INFINITY; 2],
+                    |[x, y], d| {
+                        if d < x {
+                            [d, x]
+                        } else {
+                            [x, y.min(d)]
+                        }
+                    },
+                );
+                assert!(off[1] <= delta + 1e-9, "{p}");
+            }
+        }
+    }
+    assert_eq!(
+        out.positions.iter().filter(|p| off_cube(p).1 == 3).count(),
+        8
+    );
+}
