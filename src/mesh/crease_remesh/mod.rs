@@ -423,8 +423,10 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
         }
         // Relaxation moves vertices only: one adjacency serves both.
         let topo = s.topo();
+        let before = s.pos.clone();
         relax(&mut s, &topo);
         project(&mut s, &topo, &reference);
+        undo_folds(&mut s, &before);
         rules.refresh_sizes(&mut s);
     }
     // The relaxation stretches a few edges past 4/3 L again: split those, onto the input.
@@ -433,7 +435,9 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
             break;
         }
         let topo = s.topo();
+        let before = s.pos.clone();
         project(&mut s, &topo, &reference);
+        undo_folds(&mut s, &before);
         rules.refresh_sizes(&mut s);
     }
     if opts.delaunay {
@@ -762,6 +766,48 @@ fn project(s: &mut State, topo: &Topo, reference: &Reference) {
             s.pos[v as usize] = q;
         }
     }
+}
+
+/// Largest turn of a triangle's normal in one relaxation and projection, degrees: beyond it
+/// (a triangle turned inside out or on edge, which the tangential moves of Botsch & Kobbelt's
+/// relaxation do not exclude near a corner or a tight crease) its vertices go back.
+pub const MAX_MOVE_TURN_DEG: f64 = 60.0;
+
+/// Puts back at their positions in `before` the vertices of every live triangle that the moves
+/// since then turned by more than [`MAX_MOVE_TURN_DEG`] (or shrank to nothing), until none is;
+/// the triangles of `before` are taken as sound (a triangle turned already stays as it is).
+/// Returns the vertices put back.
+fn undo_folds(s: &mut State, before: &[Point3<f64>]) -> usize {
+    let cos_max = MAX_MOVE_TURN_DEG.to_radians().cos();
+    let mut back = vec![false; s.pos.len()];
+    let mut count = 0;
+    for _ in 0..32 {
+        let mut changed = false;
+        for f in 0..s.tris.len() {
+            let t = s.tris[f];
+            if !s.alive[f] || t.iter().all(|&v| back[v as usize]) {
+                continue;
+            }
+            let [a, b, c] = t.map(|v| before[v as usize]);
+            let old = (b - a).cross(&(c - a));
+            let new = s.normal(&t);
+            if old.norm() == 0.0 || new.dot(&old) > cos_max * new.norm() * old.norm() {
+                continue;
+            }
+            for v in t {
+                if !back[v as usize] {
+                    back[v as usize] = true;
+                    s.pos[v as usize] = before[v as usize];
+                    count += 1;
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    count
 }
 
 /// The live triangles with their used vertices renumbered.

@@ -436,3 +436,35 @@ fn a_zigzag_crease_is_not_pinned_and_leaves_no_ears() {
         8
     );
 }
+
+/// A move that turns a triangle inside out is undone, with every vertex of that triangle; a
+/// move that keeps the triangles' orientation stays.
+#[test]
+fn folding_moves_are_undone() {
+    // A hexagon fan around vertex 0 in the plane z = 0.
+    let mut pos = vec![Point3::origin()];
+    for k in 0..6 {
+        let a = std::f64::consts::TAU * k as f64 / 6.0;
+        pos.push(Point3::new(a.cos(), a.sin(), 0.0));
+    }
+    let tris: Vec<[u32; 3]> = (0..6).map(|k| [0, 1 + k, 1 + (k + 1) % 6]).collect();
+    let mut s = State {
+        pos: pos.clone(),
+        labels: vec![0; tris.len()],
+        alive: vec![true; tris.len()],
+        pinned: vec![false; pos.len()],
+        size: Vec::new(),
+        tris,
+    };
+    // The centre a little off: no triangle turns.
+    s.pos[0] = Point3::new(0.2, 0.1, 0.0);
+    assert_eq!(undo_folds(&mut s, &pos), 0);
+    assert_eq!(s.pos[0], Point3::new(0.2, 0.1, 0.0));
+    // The centre past the rim (and a rim vertex nudged): the fan folds, all goes back.
+    s.pos[0] = Point3::new(1.5, 0.0, 0.0);
+    s.pos[4] = Point3::new(-1.1, 0.0, 0.0);
+    assert!(undo_folds(&mut s, &pos) >= 3);
+    assert_eq!(s.pos[0], pos[0]);
+    // Vertex 4's triangles did not fold: its move stays.
+    assert_eq!(s.pos[4], Point3::new(-1.1, 0.0, 0.0));
+}
