@@ -12,6 +12,7 @@ pub mod sample;
 pub mod subdivide;
 pub mod subsample;
 pub mod topology;
+pub mod unfold;
 
 pub use topology::{BoundaryLoop, Topology};
 

@@ -4,6 +4,8 @@
 //! three corners on the crease); this route builds the net from a surface mesh instead:
 //! 1. the mesh's triangles are labelled by smooth region ([`crate::features::segment_mesh`]:
 //!    dihedral angles, regions too small or narrow absorbed);
+//!    folds inside a region (a tent of two triangles facing apart, left by the sharp
+//!    extraction) are flipped flat ([`crate::mesh::unfold`]);
 //! 2. the labelled mesh is remeshed isotropically with its creases kept as edge paths and its
 //!    corners pinned ([`crate::mesh::crease_remesh`], Botsch & Kobbelt 2004 with crease
 //!    rules), at the edge length L that gives about the requested number of quads, with the
@@ -30,6 +32,7 @@ use super::side_projection::{project_onto_sides, region_map, SideProjectionRepor
 use crate::error::Result;
 use crate::implicit::Implicit;
 use crate::mesh::crease_remesh::{remesh, LabelledMesh, RemeshOptions};
+use crate::mesh::unfold::{unfold, UnfoldReport};
 use crate::mesh::Mesh;
 
 /// Longest move of a node onto the sides, in target edge lengths L (a net edge is L / 2).
@@ -67,6 +70,9 @@ pub struct RemeshNetReport {
     /// Triangles of the surface mesh remeshed, and its smooth regions.
     pub surface_triangles: usize,
     pub regions: usize,
+    /// Folds inside a region of the surface mesh, and those flipped flat before the remesh
+    /// ([`crate::mesh::unfold`]).
+    pub unfold: UnfoldReport,
     /// The remesh's target edge length L and crease chord tolerance (model units).
     pub target_edge: f64,
     pub crease_tolerance: f64,
@@ -120,11 +126,12 @@ pub fn remesh_net<I: Implicit + ?Sized>(
     ro.crease_tolerance = Some(opts.crease_tolerance * diagonal);
     ro.grade = Some(opts.grade);
     ro.delaunay = true;
-    let labelled = LabelledMesh {
+    let mut labelled = LabelledMesh {
         positions: mesh.positions.clone(),
         triangles: mesh.faces.clone(),
         labels: seg.face_label,
     };
+    let unfolded = unfold(&mut labelled);
     let out = remesh(&labelled, &ro)?;
     let polygons: Vec<Vec<u32>> = out.triangles.iter().map(|t| t.to_vec()).collect();
     let mut split = split_into_quads(&out.positions, &polygons, &out.labels, open)?;
@@ -145,6 +152,7 @@ pub fn remesh_net<I: Implicit + ?Sized>(
     let report = RemeshNetReport {
         surface_triangles: mesh.faces.len(),
         regions: seg.regions,
+        unfold: unfolded,
         target_edge: target,
         crease_tolerance: opts.crease_tolerance * diagonal,
         triangles: out.triangles.len(),
