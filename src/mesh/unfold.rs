@@ -37,15 +37,23 @@ fn normal(m: &LabelledMesh, t: &[u32; 3]) -> Vector3<f64> {
     (b - a).cross(&(c - a))
 }
 
-/// The folded edges inside a region: (a, b) with its two triangles (the one walking a -> b
-/// first), sorted.
-fn folded_edges(m: &LabelledMesh) -> Vec<((u32, u32), usize, usize)> {
-    let mut walk: HashMap<(u32, u32), usize> = HashMap::new();
+/// Each directed edge (a, b) of `m`'s triangles -> the triangle walking it.
+fn directed_edges(m: &LabelledMesh) -> HashMap<(u32, u32), usize> {
+    let mut walk = HashMap::new();
     for (f, t) in m.triangles.iter().enumerate() {
         for k in 0..3 {
             walk.insert((t[k], t[(k + 1) % 3]), f);
         }
     }
+    walk
+}
+
+/// The folded edges inside a region: (a, b) with its two triangles (the one walking a -> b
+/// first), sorted; `walk` from [`directed_edges`].
+fn folded_edges(
+    m: &LabelledMesh,
+    walk: &HashMap<(u32, u32), usize>,
+) -> Vec<((u32, u32), usize, usize)> {
     let mut out: Vec<((u32, u32), usize, usize)> = walk
         .iter()
         .filter(|(&(a, b), _)| a < b)
@@ -61,17 +69,12 @@ fn folded_edges(m: &LabelledMesh) -> Vec<((u32, u32), usize, usize)> {
 
 /// Flips the folded edges inside the regions of `m` flat where it can (module doc).
 pub fn unfold(m: &mut LabelledMesh) -> UnfoldReport {
-    let mut report = UnfoldReport {
-        folds: folded_edges(m).len(),
-        flipped: 0,
-    };
-    for _ in 0..8 {
-        let folds = folded_edges(m);
-        let mut walk: HashMap<(u32, u32), usize> = HashMap::new();
-        for (f, t) in m.triangles.iter().enumerate() {
-            for k in 0..3 {
-                walk.insert((t[k], t[(k + 1) % 3]), f);
-            }
+    let mut report = UnfoldReport::default();
+    for pass in 0..8 {
+        let mut walk = directed_edges(m);
+        let folds = folded_edges(m, &walk);
+        if pass == 0 {
+            report.folds = folds.len();
         }
         let mut touched = vec![false; m.triangles.len()];
         let mut flips = 0;
@@ -189,7 +192,7 @@ mod tests {
                 flipped: 1
             }
         );
-        assert!(folded_edges(&m).is_empty());
+        assert!(folded_edges(&m, &directed_edges(&m)).is_empty());
         // The diagonal is now 1-3, the orientation kept (normals up, as the neighbours').
         let has = |t: &[u32; 3], a, b| t.contains(&a) && t.contains(&b);
         assert!(has(&m.triangles[0], 1, 3) && has(&m.triangles[1], 1, 3));

@@ -81,6 +81,9 @@ pub(super) fn flip_edges(s: &mut State, rules: &Rules, flip: Flip) -> usize {
         {
             continue;
         }
+        // Whether (c, a, b) and (d, b, a) are ears (asked for ear flips only).
+        let ears =
+            (flip == Flip::Ear).then(|| (is_ear(s, &topo, c, a, b), is_ear(s, &topo, d, a, b)));
         let wanted = match flip {
             Flip::Valence => {
                 let before = deviation(a, valence[a as usize])
@@ -102,7 +105,7 @@ pub(super) fn flip_edges(s: &mut State, rules: &Rules, flip: Flip) -> usize {
             }
             // Exactly one of the two an ear: two ears across a chord would join two crease
             // vertices across their region.
-            Flip::Ear => is_ear(s, &topo, c, a, b) != is_ear(s, &topo, d, a, b),
+            Flip::Ear => ears.is_some_and(|(x, y)| x != y),
         };
         if !wanted {
             continue;
@@ -110,11 +113,11 @@ pub(super) fn flip_edges(s: &mut State, rules: &Rules, flip: Flip) -> usize {
         // f0 = (a, b, c), f1 = (b, a, d) -> (c, a, d) and (d, b, c).
         let (n0, n1) = ([c, a, d], [d, b, c]);
         let unit = |f: u32| s.normal(&s.tris[f as usize]).normalize();
-        let old = match flip {
+        let old = match ears {
             // An ear's own normal is no guide (a sliver, perhaps inside out).
-            Flip::Ear if is_ear(s, &topo, c, a, b) => unit(f1),
-            Flip::Ear => unit(f0),
-            _ => (unit(f0) + unit(f1)).normalize(),
+            Some((true, _)) => unit(f1),
+            Some(_) => unit(f0),
+            None => (unit(f0) + unit(f1)).normalize(),
         };
         let ok = [n0, n1].iter().all(|t| {
             let n = s.normal(t);
