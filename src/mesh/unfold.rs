@@ -103,11 +103,8 @@ pub fn unfold(m: &mut LabelledMesh) -> UnfoldReport {
             m.triangles[f1] = t1;
             m.labels[f0] = l0;
             m.labels[f1] = l1;
-            for t in [t0, t1] {
-                for k in 0..3 {
-                    walk.remove(&(t[(k + 1) % 3], t[k]));
-                }
-            }
+            // The directed edges: (a, b) and (b, a) go, (c, d) and (d, c) come, (a, d) and
+            // (b, c) change triangle; the neighbours' own entries stay.
             walk.remove(&(a, b));
             walk.remove(&(b, a));
             walk.insert((a, d), f0);
