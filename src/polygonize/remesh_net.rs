@@ -126,6 +126,7 @@ pub fn remesh_net<I: Implicit + ?Sized>(
     ro.crease_tolerance = Some(opts.crease_tolerance * diagonal);
     ro.grade = Some(opts.grade);
     ro.delaunay = true;
+    ro.clean_slivers = true;
     let mut labelled = LabelledMesh {
         positions: mesh.positions.clone(),
         triangles: mesh.faces.clone(),

@@ -19,7 +19,8 @@
 //! that the triangles beside such a crease do not fan out to the coarse surface; and the
 //! remesh can end with flips to locally Delaunay triangles inside the regions ([`flips`]).
 //! It always ends by flipping away the *ears*, slivers between a crease and its chord
-//! ([`flips`]), which the relaxation along a curved crease can leave.
+//! ([`flips`]), which the relaxation along a curved crease can leave, and optionally by
+//! removing the other slivers the relaxation leaves on the creases ([`cleanup`]).
 //!
 //! The creases are given, not guessed from angles: every triangle carries the region label of
 //! the input's segmentation, and an edge between two regions (or on an open boundary) is a
@@ -43,7 +44,10 @@
 //! 30 degrees) on make_parts' exact block.stl at a 7 mm target left its faces 13 degrees off
 //! (p95) and its creases 1.5 % of the diagonal away.
 
+mod cleanup;
+mod collapse;
 mod flips;
+use collapse::collapse_short;
 use flips::{flip_edges, flip_to_valence, Flip};
 pub mod reference;
 pub mod sizing;
@@ -148,6 +152,9 @@ pub struct RemeshOptions {
     /// At the end, flip the edges inside a region that are not locally Delaunay (opposite
     /// angles summing to more than pi), so that fewer triangles are obtuse (default false).
     pub delaunay: bool,
+    /// At the very end, remove the slivers (caps and needles) the last relaxation left on the
+    /// creases by flips and collapses ([`cleanup`]; default false).
+    pub clean_slivers: bool,
 }
 
 impl RemeshOptions {
@@ -159,6 +166,7 @@ impl RemeshOptions {
             surface_tolerance: None,
             grade: None,
             delaunay: false,
+            clean_slivers: false,
         }
     }
 }
@@ -452,6 +460,13 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
             break;
         }
     }
+    if opts.clean_slivers {
+        for _ in 0..4 {
+            if cleanup::clean_slivers(&mut s, &rules) + flip_edges(&mut s, &rules, Flip::Ear) == 0 {
+                break;
+            }
+        }
+    }
     Ok(compact(&s))
 }
 
@@ -575,129 +590,6 @@ fn split_long(s: &mut State, rules: &Rules) -> usize {
         count += 1;
     }
     count
-}
-
-/// Collapses edges shorter than 4/5 L, shortest first, where the rules of the module doc allow.
-fn collapse_short(s: &mut State, rules: &Rules) -> usize {
-    let topo = s.topo();
-    let mut short: Vec<((u32, u32), f64)> = topo
-        .edges
-        .keys()
-        .map(|&(a, b)| ((a, b), s.len(a, b)))
-        .filter(|&((a, b), l)| l < 0.8 * rules.edge_target(s, a, b))
-        .collect();
-    short.sort_by(|x, y| x.1.total_cmp(&y.1).then(x.0.cmp(&y.0)));
-    let mut touched = vec![false; s.pos.len()];
-    let mut count = 0;
-    for ((a, b), _) in short {
-        if touched[a as usize] || touched[b as usize] {
-            continue;
-        }
-        // The less constrained end goes.
-        let (ka, kb) = (topo.kind[a as usize], topo.kind[b as usize]);
-        let tries = if ka <= kb {
-            [(a, b), (b, a)]
-        } else {
-            [(b, a), (a, b)]
-        };
-        let Some((gone, kept)) = tries
-            .into_iter()
-            .find(|&(g, k)| may_collapse(s, &topo, g, k, rules))
-        else {
-            continue;
-        };
-        let nbrs: Vec<u32> = topo
-            .neighbours(s, gone)
-            .into_iter()
-            .chain(topo.neighbours(s, kept))
-            .collect();
-        for &f in &topo.vfaces[gone as usize] {
-            let t = &mut s.tris[f as usize];
-            if t.contains(&kept) {
-                s.alive[f as usize] = false;
-            } else {
-                for v in t.iter_mut() {
-                    if *v == gone {
-                        *v = kept;
-                    }
-                }
-            }
-        }
-        for v in nbrs.into_iter().chain([gone, kept]) {
-            touched[v as usize] = true;
-        }
-        count += 1;
-    }
-    count
-}
-
-/// Whether `gone` may collapse onto `kept` (module doc).
-fn may_collapse(s: &State, topo: &Topo, gone: u32, kept: u32, rules: &Rules) -> bool {
-    let fs = topo.edges[&key(gone, kept)];
-    let crease_edge = s.is_crease(&fs);
-    match topo.kind[gone as usize] {
-        Kind::Corner => return false,
-        Kind::Crease => {
-            if !crease_edge || topo.kind[kept as usize] == Kind::Smooth {
-                return false;
-            }
-        }
-        Kind::Smooth => {}
-    }
-    // Link condition: the common neighbours are the vertices opposite the edge.
-    let opposite: Vec<u32> = fs
-        .iter()
-        .filter(|&&f| f != NONE)
-        .map(|&f| s.opposite(f, gone, kept))
-        .collect();
-    let ng = topo.neighbours(s, gone);
-    let nk = topo.neighbours(s, kept);
-    let common = ng.iter().filter(|v| nk.binary_search(v).is_ok()).count();
-    if common != opposite.len() {
-        return false;
-    }
-    // A crease vertex's other crease edge must not fold onto an edge of a triangle it spans.
-    if topo.kind[gone as usize] == Kind::Crease
-        && topo
-            .crease_neighbours(s, gone)
-            .iter()
-            .any(|w| *w != kept && opposite.contains(w))
-    {
-        return false;
-    }
-    let pk = s.pos[kept as usize];
-    let cos_max_turn = std::f64::consts::FRAC_1_SQRT_2;
-    for &f in &topo.vfaces[gone as usize] {
-        let t = s.tris[f as usize];
-        if t.contains(&kept) {
-            continue;
-        }
-        let old = s.normal(&t);
-        let moved = t.map(|v| if v == gone { kept } else { v });
-        let new = s.normal(&moved);
-        if new.dot(&old) <= cos_max_turn * new.norm() * old.norm() {
-            return false;
-        }
-        if t.iter().any(|&v| {
-            v != gone && (s.pos[v as usize] - pk).norm() > 4.0 / 3.0 * rules.edge_target(s, kept, v)
-        }) {
-            return false;
-        }
-    }
-    // No new edge too curved for the tolerance: (kept, x) for every neighbour x of gone,
-    // on the crease where it replaces a crease edge of gone, else inside its triangles' region.
-    if rules.crease_tolerance.is_some() || rules.surface_tolerance.is_some() {
-        for &x in &ng {
-            if x == kept || opposite.contains(&x) {
-                continue;
-            }
-            let on = s.edge_on(&topo.edges[&key(gone, x)]);
-            if rules.too_curved(s, kept, x, on) {
-                return false;
-            }
-        }
-    }
-    true
 }
 
 /// Tangential relaxation: a smooth vertex towards the area-weighted centroid of its triangles'

@@ -1,0 +1,177 @@
+//! Edge collapses: a vertex merged into a neighbour under the rules of the module doc of
+//! [`super`] (corners stay, a crease vertex moves along its crease only, the link condition,
+//! no triangle turned by more than 45 degrees, no edge made too long or too curved).
+
+use super::{key, Kind, Rules, State, Topo, NONE};
+
+/// Collapses edges shorter than 4/5 L, shortest first, where the rules of the module doc allow.
+pub(super) fn collapse_short(s: &mut State, rules: &Rules) -> usize {
+    let topo = s.topo();
+    let mut short: Vec<((u32, u32), f64)> = topo
+        .edges
+        .keys()
+        .map(|&(a, b)| ((a, b), s.len(a, b)))
+        .filter(|&((a, b), l)| l < 0.8 * rules.edge_target(s, a, b))
+        .collect();
+    short.sort_by(|x, y| x.1.total_cmp(&y.1).then(x.0.cmp(&y.0)));
+    let mut touched = vec![false; s.pos.len()];
+    let mut count = 0;
+    for ((a, b), _) in short {
+        if touched[a as usize] || touched[b as usize] {
+            continue;
+        }
+        // The less constrained end goes.
+        let (ka, kb) = (topo.kind[a as usize], topo.kind[b as usize]);
+        let tries = if ka <= kb {
+            [(a, b), (b, a)]
+        } else {
+            [(b, a), (a, b)]
+        };
+        let Some((gone, kept)) = tries
+            .into_iter()
+            .find(|&(g, k)| may_collapse(s, &topo, g, k, rules, Lengths::Bounded))
+        else {
+            continue;
+        };
+        for v in collapse(s, &topo, gone, kept) {
+            touched[v as usize] = true;
+        }
+        count += 1;
+    }
+    count
+}
+
+/// Merges `gone` into `kept`: the triangles on their edge die, the others of `gone` take
+/// `kept`. Returns the vertices whose one-ring changed (both ends and their neighbours).
+pub(super) fn collapse(s: &mut State, topo: &Topo, gone: u32, kept: u32) -> Vec<u32> {
+    let changed: Vec<u32> = topo
+        .neighbours(s, gone)
+        .into_iter()
+        .chain(topo.neighbours(s, kept))
+        .chain([gone, kept])
+        .collect();
+    for &f in &topo.vfaces[gone as usize] {
+        let t = &mut s.tris[f as usize];
+        if t.contains(&kept) {
+            s.alive[f as usize] = false;
+        } else {
+            for v in t.iter_mut() {
+                if *v == gone {
+                    *v = kept;
+                }
+            }
+        }
+    }
+    changed
+}
+
+/// Whether triangle `t` is a sliver: an angle under [`super::cleanup::SLIVER_DEG`] (or over
+/// 180 degrees less that), so that its normal is no guide to its region's.
+pub(super) fn is_sliver(s: &State, t: &[u32; 3]) -> bool {
+    let area2 = s.normal(t).norm();
+    let [a, b, c] = *t;
+    let (la, lb, lc) = (s.len(b, c), s.len(c, a), s.len(a, b));
+    // 2 area = l1 l2 sin(angle between them), for the angle at each vertex.
+    let sin_min = [lb * lc, lc * la, la * lb]
+        .into_iter()
+        .map(|p| if p > 0.0 { area2 / p } else { 0.0 })
+        .fold(f64::INFINITY, f64::min);
+    sin_min < super::cleanup::SLIVER_DEG.to_radians().sin()
+}
+
+/// Whether a collapse may make edges longer than 4/3 of their target.
+#[derive(Clone, Copy, PartialEq)]
+pub(super) enum Lengths {
+    /// No (the remeshing's collapses).
+    Bounded,
+    /// Yes (the clean-up of degenerate triangles, [`super::cleanup`]).
+    Free,
+}
+
+/// Whether `gone` may collapse onto `kept` (module doc), within the edge lengths `lengths`.
+pub(super) fn may_collapse(
+    s: &State,
+    topo: &Topo,
+    gone: u32,
+    kept: u32,
+    rules: &Rules,
+    lengths: Lengths,
+) -> bool {
+    let fs = topo.edges[&key(gone, kept)];
+    let crease_edge = s.is_crease(&fs);
+    match topo.kind[gone as usize] {
+        Kind::Corner => return false,
+        Kind::Crease => {
+            if !crease_edge || topo.kind[kept as usize] == Kind::Smooth {
+                return false;
+            }
+        }
+        Kind::Smooth => {}
+    }
+    // Link condition: the common neighbours are the vertices opposite the edge.
+    let opposite: Vec<u32> = fs
+        .iter()
+        .filter(|&&f| f != NONE)
+        .map(|&f| s.opposite(f, gone, kept))
+        .collect();
+    let ng = topo.neighbours(s, gone);
+    let nk = topo.neighbours(s, kept);
+    let common = ng.iter().filter(|v| nk.binary_search(v).is_ok()).count();
+    if common != opposite.len() {
+        return false;
+    }
+    // A crease vertex's other crease edge must not fold onto an edge of a triangle it spans.
+    if topo.kind[gone as usize] == Kind::Crease
+        && topo
+            .crease_neighbours(s, gone)
+            .iter()
+            .any(|w| *w != kept && opposite.contains(w))
+    {
+        return false;
+    }
+    let pk = s.pos[kept as usize];
+    let cos_max_turn = std::f64::consts::FRAC_1_SQRT_2;
+    // Freed lengths serve the clean-up of slivers, whose own normals are no guide: a sliver
+    // is judged against the area-weighted normal of `gone`'s one-ring instead.
+    let ring: nalgebra::Vector3<f64> = topo.vfaces[gone as usize]
+        .iter()
+        .map(|&f| s.normal(&s.tris[f as usize]))
+        .sum();
+    for &f in &topo.vfaces[gone as usize] {
+        let t = s.tris[f as usize];
+        if t.contains(&kept) {
+            continue;
+        }
+        let mut old = s.normal(&t);
+        if lengths == Lengths::Free && is_sliver(s, &t) {
+            old = ring;
+        }
+        let moved = t.map(|v| if v == gone { kept } else { v });
+        let new = s.normal(&moved);
+        if new.dot(&old) <= cos_max_turn * new.norm() * old.norm() {
+            return false;
+        }
+        if lengths == Lengths::Bounded
+            && t.iter().any(|&v| {
+                v != gone
+                    && (s.pos[v as usize] - pk).norm() > 4.0 / 3.0 * rules.edge_target(s, kept, v)
+            })
+        {
+            return false;
+        }
+    }
+    // No new edge too curved for the tolerance: (kept, x) for every neighbour x of gone,
+    // on the crease where it replaces a crease edge of gone, else inside its triangles' region.
+    if rules.crease_tolerance.is_some() || rules.surface_tolerance.is_some() {
+        for &x in &ng {
+            if x == kept || opposite.contains(&x) {
+                continue;
+            }
+            let on = s.edge_on(&topo.edges[&key(gone, x)]);
+            if rules.too_curved(s, kept, x, on) {
+                return false;
+            }
+        }
+    }
+    true
+}
