@@ -12,7 +12,13 @@
 //!   [`FLIP_TURN_DEG`] of the area-weighted normal of the four vertices' triangles (the cap's own
 //!   normal is no guide); if a - b is a crease edge and x a smooth vertex, x is collapsed onto the
 //!   nearer of a and b (a crease vertex x is an ear: [`super::flips`]);
-//! - a needle: its shortest edge is collapsed, the less constrained end going.
+//! - a needle: its shortest edge is collapsed, the less constrained end going;
+//! - before them, a crease *hairpin*: a crease vertex whose two crease edges meet at under
+//!   [`HAIRPIN_DEG`] (the extracted crease overshooting a corner by a fraction of a voxel and
+//!   coming back, a triangle of each region turned over in the bend) is collapsed onto its
+//!   nearer crease neighbour; such a vertex is not pinned as a turn of the crease
+//!   (`crease_turns` in [`super`]). A new triangle that is a sliver along the straightened
+//!   crease is allowed here (the next pass removes it), a folded one is not.
 //!
 //! The collapses keep the rules of [`super::collapse`] (corners stay, crease vertices move along
 //! their crease, the link condition, no triangle turned over, no edge too curved for the
@@ -27,6 +33,9 @@ pub const SLIVER_DEG: f64 = 5.0;
 
 /// A cap's flip may turn its new triangles by at most this from the local normal, degrees.
 pub const FLIP_TURN_DEG: f64 = 45.0;
+
+/// A crease vertex whose two crease edges meet at less than this is a hairpin, degrees.
+pub const HAIRPIN_DEG: f64 = 60.0;
 
 /// Passes of [`clean_slivers`] at most.
 const PASSES: usize = 8;
@@ -50,6 +59,18 @@ fn clean_pass(s: &mut State, rules: &Rules) -> usize {
     let topo = s.topo();
     let mut touched = vec![false; s.pos.len()];
     let mut count = 0;
+    for x in 0..s.pos.len() as u32 {
+        if topo.kind[x as usize] != Kind::Crease || touched[x as usize] {
+            continue;
+        }
+        let changed = unpin_hairpin(s, &topo, rules, x);
+        if !changed.is_empty() {
+            for v in changed {
+                touched[v as usize] = true;
+            }
+            count += 1;
+        }
+    }
     for f in 0..s.tris.len() as u32 {
         let t = s.tris[f as usize];
         if !s.alive[f as usize] || t.iter().any(|&v| touched[v as usize]) || !is_sliver(s, &t) {
@@ -107,6 +128,26 @@ fn repair(s: &mut State, topo: &Topo, rules: &Rules, f: u32) -> Vec<u32> {
         .into_iter()
         .find(|&(g, k)| may_collapse(s, topo, g, k, rules, Lengths::Free))
         .map_or_else(Vec::new, |(g, k)| collapse(s, topo, g, k))
+}
+
+/// Collapses crease vertex `x` onto the nearer crease neighbour (else the farther) where its
+/// crease turns back on itself, its two crease edges meeting at under [`HAIRPIN_DEG`]: the
+/// extracted crease overshooting a corner and coming back, a region's triangle folded into
+/// the hairpin. Returns the vertices whose one-ring changed.
+fn unpin_hairpin(s: &mut State, topo: &Topo, rules: &Rules, x: u32) -> Vec<u32> {
+    let ends = topo.crease_neighbours(s, x);
+    let [u, w] = ends[..] else {
+        return Vec::new();
+    };
+    let p = s.pos[x as usize];
+    if (s.pos[u as usize] - p).angle(&(s.pos[w as usize] - p)) >= HAIRPIN_DEG.to_radians() {
+        return Vec::new();
+    }
+    let mut ends = [u, w];
+    ends.sort_by(|&a, &b| s.len(x, a).total_cmp(&s.len(x, b)));
+    ends.into_iter()
+        .find(|&k| may_collapse(s, topo, x, k, rules, Lengths::Hairpin))
+        .map_or_else(Vec::new, |k| collapse(s, topo, x, k))
 }
 
 /// Flips the edge a - b of cap `f` = (x, a, b) to x - d (module doc).
@@ -251,5 +292,74 @@ mod tests {
             .iter()
             .zip(&state.alive)
             .all(|(t, &a)| !a || !t.contains(&3)));
+    }
+
+    #[test]
+    fn a_crease_hairpin_is_undone() {
+        // The crease c0 - c1 - h - c2 runs past its end c2 to h and comes back: the floor's
+        // triangle (h, c2, i2) and the wall's (c2, h, w2) are turned over.
+        let p = |x: f64, y: f64, z: f64| Point3::new(x, y, z);
+        // c0 c1 h c2 i0 i1 i2 w0 w1 w2
+        let pos = vec![
+            p(0.0, 0.0, 0.0),
+            p(1.0, 0.0, 0.0),
+            p(2.2, 0.0, 0.0),
+            p(2.0, 0.0, 0.0),
+            p(0.0, 1.0, 0.0),
+            p(1.0, 1.0, 0.0),
+            p(2.0, 1.0, 0.0),
+            p(0.0, 0.0, 1.0),
+            p(1.0, 0.0, 1.0),
+            p(2.0, 0.0, 1.0),
+        ];
+        let (c0, c1, h, c2, i0, i1, i2, w0, w1, w2) = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9);
+        let tris = vec![
+            [c0, c1, i1],
+            [c0, i1, i0],
+            [h, i1, c1],
+            [h, i2, i1],
+            [h, c2, i2],
+            [c1, c0, w0],
+            [c1, w0, w1],
+            [h, c1, w1],
+            [h, w1, w2],
+            [c2, h, w2],
+        ];
+        let labels = vec![0, 0, 0, 0, 0, 1, 1, 1, 1, 1];
+        let mut state = State {
+            pos: pos.clone(),
+            tris: tris.clone(),
+            labels: labels.clone(),
+            alive: vec![true; tris.len()],
+            pinned: vec![false; pos.len()],
+            size: Vec::new(),
+        };
+        assert_eq!(state.topo().kind[h as usize], Kind::Crease);
+        let reference = Reference::new(&pos, &tris, &labels, &[]);
+        let rules = Rules {
+            target: 1.0,
+            sizing: None,
+            min: 1.0 / 16.0,
+            crease_tolerance: None,
+            surface_tolerance: None,
+            reference: &reference,
+        };
+        assert!(clean_slivers(&mut state, &rules) > 0);
+        for (f, t) in state.tris.iter().enumerate() {
+            if !state.alive[f] {
+                continue;
+            }
+            assert!(!t.contains(&h), "the hairpin's vertex is left in {t:?}");
+            let n = state.normal(t).normalize();
+            let want = if state.labels[f] == 0 {
+                Vector3::z()
+            } else {
+                Vector3::y()
+            };
+            assert!(n.dot(&want) > 0.99, "triangle {t:?} faces {n:?}");
+        }
+        let topo = state.topo();
+        let fs = topo.edges.get(&key(c1, c2)).expect("the crease ends at c2");
+        assert!(state.is_crease(fs));
     }
 }

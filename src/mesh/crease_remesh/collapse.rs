@@ -79,13 +79,17 @@ pub(super) fn is_sliver(s: &State, t: &[u32; 3]) -> bool {
     sin_min < super::cleanup::SLIVER_DEG.to_radians().sin()
 }
 
-/// Whether a collapse may make edges longer than 4/3 of their target.
+/// Which collapses are asked for.
 #[derive(Clone, Copy, PartialEq)]
 pub(super) enum Lengths {
-    /// No (the remeshing's collapses).
+    /// The remeshing's: no edge made longer than 4/3 of its target.
     Bounded,
-    /// Yes (the clean-up of degenerate triangles, [`super::cleanup`]).
+    /// The clean-up of slivers ([`super::cleanup`]): edges of any length.
     Free,
+    /// The clean-up of a crease's hairpin ([`super::cleanup`]): edges of any length, and the
+    /// crease vertex `gone` may fold its other crease edge onto the triangle it spans with
+    /// them (the hairpin's ear, which the collapse removes).
+    Hairpin,
 }
 
 /// Whether `gone` may collapse onto `kept` (module doc), within the edge lengths `lengths`.
@@ -121,7 +125,8 @@ pub(super) fn may_collapse(
         return false;
     }
     // A crease vertex's other crease edge must not fold onto an edge of a triangle it spans.
-    if topo.kind[gone as usize] == Kind::Crease
+    if lengths != Lengths::Hairpin
+        && topo.kind[gone as usize] == Kind::Crease
         && topo
             .crease_neighbours(s, gone)
             .iter()
@@ -143,12 +148,15 @@ pub(super) fn may_collapse(
             continue;
         }
         let mut old = s.normal(&t);
-        if lengths == Lengths::Free && is_sliver(s, &t) {
+        if lengths != Lengths::Bounded && is_sliver(s, &t) {
             old = ring;
         }
         let moved = t.map(|v| if v == gone { kept } else { v });
         let new = s.normal(&moved);
-        if new.dot(&old) <= cos_max_turn * new.norm() * old.norm() {
+        // Undoing a hairpin may leave a sliver along the straightened crease for the next
+        // pass of the clean-up, not a fold.
+        let sliver_left = lengths == Lengths::Hairpin && is_sliver(s, &moved);
+        if !sliver_left && new.dot(&old) <= cos_max_turn * new.norm() * old.norm() {
             return false;
         }
         if lengths == Lengths::Bounded

@@ -380,7 +380,7 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
             creases.push(([a, b], crease_key(s.labels[fs[0] as usize], other)));
         }
     }
-    let pins = crease_turns(&s, &topo, creases.iter().map(|c| c.0));
+    let pins = crease_turns(&s, &topo, creases.iter().map(|c| c.0), opts.clean_slivers);
     for v in pins {
         s.pinned[v as usize] = true;
     }
@@ -476,8 +476,15 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
 /// (or to the crease's end, a corner, if nearer). A corner of a crease turns at every scale;
 /// the zigzag of an extracted crease (a vertex a tenth of a voxel off a straight edge turns its
 /// two short edges by tens of degrees) only at the scale of its edges, and pinned it would stay
-/// for good, with its slivers.
-fn crease_turns(s: &State, topo: &Topo, crease_edges: impl Iterator<Item = [u32; 2]>) -> Vec<u32> {
+/// for good, with its slivers. With `hairpins_free`, a turn by more than 180 degrees less
+/// [`cleanup::HAIRPIN_DEG`] (the crease coming back on itself: an extraction overshooting a
+/// corner) is not pinned either: the clean-up undoes it.
+fn crease_turns(
+    s: &State,
+    topo: &Topo,
+    crease_edges: impl Iterator<Item = [u32; 2]>,
+    hairpins_free: bool,
+) -> Vec<u32> {
     let (mut sum, mut n) = (0.0, 0usize);
     for [a, b] in crease_edges {
         sum += s.len(a, b);
@@ -507,6 +514,11 @@ fn crease_turns(s: &State, topo: &Topo, crease_edges: impl Iterator<Item = [u32;
         s.pos[cur as usize]
     };
     let cos_turn = PIN_TURN_DEG.to_radians().cos();
+    let cos_hairpin = if hairpins_free {
+        (180.0 - cleanup::HAIRPIN_DEG).to_radians().cos()
+    } else {
+        -1.0
+    };
     (0..s.pos.len() as u32)
         .filter(|&v| {
             if topo.kind[v as usize] != Kind::Crease {
@@ -515,7 +527,8 @@ fn crease_turns(s: &State, topo: &Topo, crease_edges: impl Iterator<Item = [u32;
             let c = topo.crease_neighbours(s, v);
             let p = s.pos[v as usize];
             let (d0, d1) = (p - walk(v, c[0]), walk(v, c[1]) - p);
-            d0.dot(&d1) < cos_turn * d0.norm() * d1.norm()
+            let cos = d0.dot(&d1) / (d0.norm() * d1.norm());
+            cos < cos_turn && cos >= cos_hairpin
         })
         .collect()
 }
