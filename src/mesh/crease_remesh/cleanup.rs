@@ -188,57 +188,48 @@ mod tests {
     use super::*;
     use nalgebra::Point3;
 
-    /// A floor (region 0, z = 0, y in [0, 1]) and a wall (region 1, y = 0) meeting along the
-    /// crease c0 - c1 - c2 on the x axis, with the floor's vertex `s` (index 3) at `s`.
-    fn floor_and_wall(s: Point3<f64>) -> (State, LabelledMesh) {
+    // Vertex names of the floor-and-wall meshes: the crease c0 - c1 - c2 on the x axis, the
+    // floor's far side i0 i1 i2 (y = 1), the wall's top w0 w1 w2 (z = 1), and a vertex v3.
+    const C0: u32 = 0;
+    const C1: u32 = 1;
+    const C2: u32 = 2;
+    const V3: u32 = 3;
+    const I0: u32 = 4;
+    const I1: u32 = 5;
+    const I2: u32 = 6;
+    const W0: u32 = 7;
+    const W1: u32 = 8;
+    const W2: u32 = 9;
+
+    /// A floor (region 0, z = 0, y in [0, 1], facing +z) and a wall (region 1, y = 0, facing
+    /// +y) meeting along the x axis, vertex 3 at `v3`, with the given triangles (floor first).
+    fn floor_and_wall(v3: Point3<f64>, floor: &[[u32; 3]], wall: &[[u32; 3]]) -> LabelledMesh {
         let p = |x: f64, y: f64, z: f64| Point3::new(x, y, z);
-        // c0 c1 c2 s i0 i1 i2 w0 w1 w2
-        let pos = vec![
-            p(0.0, 0.0, 0.0),
-            p(1.0, 0.0, 0.0),
-            p(2.0, 0.0, 0.0),
-            s,
-            p(0.0, 1.0, 0.0),
-            p(1.0, 1.0, 0.0),
-            p(2.0, 1.0, 0.0),
-            p(0.0, 0.0, 1.0),
-            p(1.0, 0.0, 1.0),
-            p(2.0, 0.0, 1.0),
-        ];
-        let (c0, c1, c2, sv, i0, i1, i2, w0, w1, w2) = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9);
-        let tris = vec![
-            [c0, c1, i1],
-            [c0, i1, i0],
-            [c1, c2, sv],
-            [c1, sv, i1],
-            [sv, c2, i2],
-            [sv, i2, i1],
-            [c1, c0, w0],
-            [c1, w0, w1],
-            [c2, c1, w1],
-            [c2, w1, w2],
-        ];
-        let labels = vec![0, 0, 0, 0, 0, 0, 1, 1, 1, 1];
-        let state = State {
-            pos: pos.clone(),
-            tris: tris.clone(),
-            labels: labels.clone(),
-            alive: vec![true; tris.len()],
-            pinned: vec![false; pos.len()],
-            size: Vec::new(),
-        };
-        let mesh = LabelledMesh {
-            positions: pos,
-            triangles: tris,
-            labels,
-        };
-        (state, mesh)
+        let mut positions = vec![p(0.0, 0.0, 0.0), p(1.0, 0.0, 0.0), p(2.0, 0.0, 0.0), v3];
+        positions.extend([0.0, 1.0, 2.0].map(|x| p(x, 1.0, 0.0)));
+        positions.extend([0.0, 1.0, 2.0].map(|x| p(x, 0.0, 1.0)));
+        LabelledMesh {
+            positions,
+            triangles: floor.iter().chain(wall).copied().collect(),
+            labels: floor
+                .iter()
+                .map(|_| 0)
+                .chain(wall.iter().map(|_| 1))
+                .collect(),
+        }
     }
 
-    /// Cleans the floor-and-wall mesh and checks that no sliver is left, the floor still
-    /// faces +z and the wall +y, and the crease is still the path c0 - c1 - c2.
-    fn cleaned(s: Point3<f64>) -> State {
-        let (mut state, m) = floor_and_wall(s);
+    /// Cleans `m` and checks that something was done, no sliver is left, the floor still faces
+    /// +z and the wall +y, and `crease` is still a crease edge; returns the live triangles.
+    fn clean(m: &LabelledMesh, crease: (u32, u32)) -> Vec<[u32; 3]> {
+        let mut state = State {
+            pos: m.positions.clone(),
+            tris: m.triangles.clone(),
+            labels: m.labels.clone(),
+            alive: vec![true; m.triangles.len()],
+            pinned: vec![false; m.positions.len()],
+            size: Vec::new(),
+        };
         let reference = Reference::new(&m.positions, &m.triangles, &m.labels, &[]);
         let rules = Rules {
             target: 1.0,
@@ -249,6 +240,7 @@ mod tests {
             reference: &reference,
         };
         assert!(clean_slivers(&mut state, &rules) > 0);
+        let mut live = Vec::new();
         for (f, t) in state.tris.iter().enumerate() {
             if !state.alive[f] {
                 continue;
@@ -261,105 +253,66 @@ mod tests {
                 Vector3::y()
             };
             assert!(n.dot(&want) > 0.99, "triangle {t:?} faces {n:?}");
+            live.push(*t);
         }
         let topo = state.topo();
-        for (a, b) in [(0, 1), (1, 2)] {
-            let fs = topo.edges.get(&key(a, b)).expect("crease edge kept");
-            assert!(state.is_crease(fs));
-        }
-        state
+        let fs = topo.edges.get(&key(crease.0, crease.1));
+        assert!(
+            fs.is_some_and(|fs| state.is_crease(fs)),
+            "crease {crease:?} lost"
+        );
+        live
     }
+
+    /// The floor with the smooth vertex v3 near the crease edge c1 - c2, over which it has the
+    /// triangle (c1, c2, v3).
+    const FLOOR: [[u32; 3]; 6] = [
+        [C0, C1, I1],
+        [C0, I1, I0],
+        [C1, C2, V3],
+        [C1, V3, I1],
+        [V3, C2, I2],
+        [V3, I2, I1],
+    ];
+    const WALL: [[u32; 3]; 4] = [[C1, C0, W0], [C1, W0, W1], [C2, C1, W1], [C2, W1, W2]];
 
     #[test]
     fn a_smooth_vertex_on_a_crease_edge_is_collapsed() {
-        // s on the crease edge c1 - c2: the cap (c1, c2, s) at 179.9 degrees.
-        let state = cleaned(Point3::new(1.5, 0.001, 0.0));
-        let alive = state.alive.iter().filter(|&&a| a).count();
-        assert_eq!(alive, 8, "the cap and one triangle of s go");
-        assert!(state
-            .tris
-            .iter()
-            .zip(&state.alive)
-            .all(|(t, &a)| !a || !t.contains(&3)));
+        // v3 on the crease edge c1 - c2: the cap (c1, c2, v3) at 179.9 degrees.
+        let m = floor_and_wall(Point3::new(1.5, 0.001, 0.0), &FLOOR, &WALL);
+        let live = clean(&m, (C1, C2));
+        assert_eq!(live.len(), 8, "the cap and one triangle of v3 go");
+        assert!(live.iter().all(|t| !t.contains(&V3)));
     }
 
     #[test]
     fn a_smooth_vertex_beside_a_crease_vertex_is_collapsed() {
-        // s 0.02 from c1: the needle (c1, c2, s) and the cap (c1, s, i1).
-        let state = cleaned(Point3::new(1.0, 0.02, 0.0));
-        assert!(state
-            .tris
-            .iter()
-            .zip(&state.alive)
-            .all(|(t, &a)| !a || !t.contains(&3)));
+        // v3 0.02 from c1: the needle (c1, c2, v3) and the cap (c1, v3, i1).
+        let m = floor_and_wall(Point3::new(1.0, 0.02, 0.0), &FLOOR, &WALL);
+        let live = clean(&m, (C1, C2));
+        assert!(live.iter().all(|t| !t.contains(&V3)));
     }
 
     #[test]
     fn a_crease_hairpin_is_undone() {
-        // The crease c0 - c1 - h - c2 runs past its end c2 to h and comes back: the floor's
-        // triangle (h, c2, i2) and the wall's (c2, h, w2) are turned over.
-        let p = |x: f64, y: f64, z: f64| Point3::new(x, y, z);
-        // c0 c1 h c2 i0 i1 i2 w0 w1 w2
-        let pos = vec![
-            p(0.0, 0.0, 0.0),
-            p(1.0, 0.0, 0.0),
-            p(2.2, 0.0, 0.0),
-            p(2.0, 0.0, 0.0),
-            p(0.0, 1.0, 0.0),
-            p(1.0, 1.0, 0.0),
-            p(2.0, 1.0, 0.0),
-            p(0.0, 0.0, 1.0),
-            p(1.0, 0.0, 1.0),
-            p(2.0, 0.0, 1.0),
+        // The crease c0 - c1 - v3 - c2 runs past its end c2 to v3 (x = 2.2) and comes back:
+        // the floor's triangle (v3, c2, i2) and the wall's (c2, v3, w2) are turned over.
+        let floor = [
+            [C0, C1, I1],
+            [C0, I1, I0],
+            [V3, I1, C1],
+            [V3, I2, I1],
+            [V3, C2, I2],
         ];
-        let (c0, c1, h, c2, i0, i1, i2, w0, w1, w2) = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9);
-        let tris = vec![
-            [c0, c1, i1],
-            [c0, i1, i0],
-            [h, i1, c1],
-            [h, i2, i1],
-            [h, c2, i2],
-            [c1, c0, w0],
-            [c1, w0, w1],
-            [h, c1, w1],
-            [h, w1, w2],
-            [c2, h, w2],
+        let wall = [
+            [C1, C0, W0],
+            [C1, W0, W1],
+            [V3, C1, W1],
+            [V3, W1, W2],
+            [C2, V3, W2],
         ];
-        let labels = vec![0, 0, 0, 0, 0, 1, 1, 1, 1, 1];
-        let mut state = State {
-            pos: pos.clone(),
-            tris: tris.clone(),
-            labels: labels.clone(),
-            alive: vec![true; tris.len()],
-            pinned: vec![false; pos.len()],
-            size: Vec::new(),
-        };
-        assert_eq!(state.topo().kind[h as usize], Kind::Crease);
-        let reference = Reference::new(&pos, &tris, &labels, &[]);
-        let rules = Rules {
-            target: 1.0,
-            sizing: None,
-            min: 1.0 / 16.0,
-            crease_tolerance: None,
-            surface_tolerance: None,
-            reference: &reference,
-        };
-        assert!(clean_slivers(&mut state, &rules) > 0);
-        for (f, t) in state.tris.iter().enumerate() {
-            if !state.alive[f] {
-                continue;
-            }
-            assert!(!t.contains(&h), "the hairpin's vertex is left in {t:?}");
-            let n = state.normal(t).normalize();
-            let want = if state.labels[f] == 0 {
-                Vector3::z()
-            } else {
-                Vector3::y()
-            };
-            assert!(n.dot(&want) > 0.99, "triangle {t:?} faces {n:?}");
-        }
-        let topo = state.topo();
-        let fs = topo.edges.get(&key(c1, c2)).expect("the crease ends at c2");
-        assert!(state.is_crease(fs));
+        let m = floor_and_wall(Point3::new(2.2, 0.0, 0.0), &floor, &wall);
+        let live = clean(&m, (C1, C2));
+        assert!(live.iter().all(|t| !t.contains(&V3)), "the hairpin is left");
     }
 }
