@@ -24,7 +24,7 @@
 //! their crease, the link condition, no triangle turned over, no edge too curved for the
 //! tolerance) except the 4/3 L bound on the edges they lengthen.
 
-use super::collapse::{collapse, is_sliver, may_collapse, Lengths};
+use super::collapse::{collapse_first, less_constrained_first, nearer_first, Purpose};
 use super::{key, Kind, On, Rules, State, Topo, NONE};
 use nalgebra::Vector3;
 
@@ -40,6 +40,20 @@ pub const HAIRPIN_DEG: f64 = 60.0;
 /// Passes of [`clean_slivers`] at most.
 const PASSES: usize = 8;
 
+/// Whether triangle `t` is a sliver: an angle under [`SLIVER_DEG`] (or over
+/// 180 degrees less that), so that its normal is no guide to its region's.
+pub(super) fn is_sliver(s: &State, t: &[u32; 3]) -> bool {
+    let area2 = s.normal(t).norm();
+    let [a, b, c] = *t;
+    let (la, lb, lc) = (s.len(b, c), s.len(c, a), s.len(a, b));
+    // 2 area = l1 l2 sin(angle between them), for the angle at each vertex.
+    let sin_min = [lb * lc, lc * la, la * lb]
+        .into_iter()
+        .map(|p| if p > 0.0 { area2 / p } else { 0.0 })
+        .fold(f64::INFINITY, f64::min);
+    sin_min < SLIVER_DEG.to_radians().sin()
+}
+
 /// Removes slivers (module doc) until none is left that a rule can remove, at most [`PASSES`]
 /// passes. Returns the flips and collapses made.
 pub(super) fn clean_slivers(s: &mut State, rules: &Rules) -> usize {
@@ -54,34 +68,28 @@ pub(super) fn clean_slivers(s: &mut State, rules: &Rules) -> usize {
     total
 }
 
-/// One pass: every sliver whose vertices no earlier repair of the pass touched.
+/// One pass: every hairpin, then every sliver, whose vertices no earlier repair of the pass
+/// touched.
 fn clean_pass(s: &mut State, rules: &Rules) -> usize {
     let topo = s.topo();
     let mut touched = vec![false; s.pos.len()];
     let mut count = 0;
-    for x in 0..s.pos.len() as u32 {
-        if topo.kind[x as usize] != Kind::Crease || touched[x as usize] {
-            continue;
+    // Marks the vertices a repair changed; whether it made one.
+    let mut made = |changed: Vec<u32>, touched: &mut Vec<bool>| {
+        for &v in &changed {
+            touched[v as usize] = true;
         }
-        let changed = unpin_hairpin(s, &topo, rules, x);
-        if !changed.is_empty() {
-            for v in changed {
-                touched[v as usize] = true;
-            }
-            count += 1;
+        count += usize::from(!changed.is_empty());
+    };
+    for x in 0..s.pos.len() as u32 {
+        if topo.kind[x as usize] == Kind::Crease && !touched[x as usize] {
+            made(unpin_hairpin(s, &topo, rules, x), &mut touched);
         }
     }
     for f in 0..s.tris.len() as u32 {
         let t = s.tris[f as usize];
-        if !s.alive[f as usize] || t.iter().any(|&v| touched[v as usize]) || !is_sliver(s, &t) {
-            continue;
-        }
-        let changed = repair(s, &topo, rules, f);
-        if !changed.is_empty() {
-            for v in changed {
-                touched[v as usize] = true;
-            }
-            count += 1;
+        if s.alive[f as usize] && !t.iter().any(|&v| touched[v as usize]) && is_sliver(s, &t) {
+            made(repair(s, &topo, rules, f), &mut touched);
         }
     }
     count
@@ -107,27 +115,15 @@ fn repair(s: &mut State, topo: &Topo, rules: &Rules, f: u32) -> Vec<u32> {
         if topo.kind[x as usize] != Kind::Smooth {
             return Vec::new();
         }
-        let mut ends = [a, b];
-        ends.sort_by(|&u, &w| s.len(x, u).total_cmp(&s.len(x, w)));
-        return ends
-            .into_iter()
-            .find(|&k| may_collapse(s, topo, x, k, rules, Lengths::Free))
-            .map_or_else(Vec::new, |k| collapse(s, topo, x, k));
+        return collapse_first(s, topo, nearer_first(s, x, a, b), rules, Purpose::Sliver);
     }
     // A needle: its shortest edge (the one opposite its smallest angle) goes.
     let narrowest = (0..3)
         .min_by(|&i, &j| angles[i].total_cmp(&angles[j]))
         .unwrap_or(0);
     let (a, b) = (t[(narrowest + 1) % 3], t[(narrowest + 2) % 3]);
-    let tries = if topo.kind[a as usize] <= topo.kind[b as usize] {
-        [(a, b), (b, a)]
-    } else {
-        [(b, a), (a, b)]
-    };
-    tries
-        .into_iter()
-        .find(|&(g, k)| may_collapse(s, topo, g, k, rules, Lengths::Free))
-        .map_or_else(Vec::new, |(g, k)| collapse(s, topo, g, k))
+    let tries = less_constrained_first(topo, a, b);
+    collapse_first(s, topo, tries, rules, Purpose::Sliver)
 }
 
 /// Collapses crease vertex `x` onto the nearer crease neighbour (else the farther) where its
@@ -143,11 +139,7 @@ fn unpin_hairpin(s: &mut State, topo: &Topo, rules: &Rules, x: u32) -> Vec<u32> 
     if (s.pos[u as usize] - p).angle(&(s.pos[w as usize] - p)) >= HAIRPIN_DEG.to_radians() {
         return Vec::new();
     }
-    let mut ends = [u, w];
-    ends.sort_by(|&a, &b| s.len(x, a).total_cmp(&s.len(x, b)));
-    ends.into_iter()
-        .find(|&k| may_collapse(s, topo, x, k, rules, Lengths::Hairpin))
-        .map_or_else(Vec::new, |k| collapse(s, topo, x, k))
+    collapse_first(s, topo, nearer_first(s, x, u, w), rules, Purpose::Hairpin)
 }
 
 /// Flips the edge a - b of cap `f` = (x, a, b) to x - d (module doc).
@@ -222,14 +214,7 @@ mod tests {
     /// Cleans `m` and checks that something was done, no sliver is left, the floor still faces
     /// +z and the wall +y, and `crease` is still a crease edge; returns the live triangles.
     fn clean(m: &LabelledMesh, crease: (u32, u32)) -> Vec<[u32; 3]> {
-        let mut state = State {
-            pos: m.positions.clone(),
-            tris: m.triangles.clone(),
-            labels: m.labels.clone(),
-            alive: vec![true; m.triangles.len()],
-            pinned: vec![false; m.positions.len()],
-            size: Vec::new(),
-        };
+        let mut state = State::new(m);
         let reference = Reference::new(&m.positions, &m.triangles, &m.labels, &[]);
         let rules = Rules {
             target: 1.0,

@@ -2,6 +2,7 @@
 //! [`super`] (corners stay, a crease vertex moves along its crease only, the link condition,
 //! no triangle turned by more than 45 degrees, no edge made too long or too curved).
 
+use super::cleanup::is_sliver;
 use super::{key, Kind, Rules, State, Topo, NONE};
 
 /// Collapses edges shorter than 4/5 L, shortest first, where the rules of the module doc allow.
@@ -20,20 +21,17 @@ pub(super) fn collapse_short(s: &mut State, rules: &Rules) -> usize {
         if touched[a as usize] || touched[b as usize] {
             continue;
         }
-        // The less constrained end goes.
-        let (ka, kb) = (topo.kind[a as usize], topo.kind[b as usize]);
-        let tries = if ka <= kb {
-            [(a, b), (b, a)]
-        } else {
-            [(b, a), (a, b)]
-        };
-        let Some((gone, kept)) = tries
-            .into_iter()
-            .find(|&(g, k)| may_collapse(s, &topo, g, k, rules, Lengths::Bounded))
-        else {
+        let changed = collapse_first(
+            s,
+            &topo,
+            less_constrained_first(&topo, a, b),
+            rules,
+            Purpose::Remesh,
+        );
+        if changed.is_empty() {
             continue;
-        };
-        for v in collapse(s, &topo, gone, kept) {
+        }
+        for v in changed {
             touched[v as usize] = true;
         }
         count += 1;
@@ -41,9 +39,42 @@ pub(super) fn collapse_short(s: &mut State, rules: &Rules) -> usize {
     count
 }
 
+/// The two ways of collapsing edge (a, b), the less constrained end ([`Kind`]) going first.
+pub(super) fn less_constrained_first(topo: &Topo, a: u32, b: u32) -> [(u32, u32); 2] {
+    if topo.kind[a as usize] <= topo.kind[b as usize] {
+        [(a, b), (b, a)]
+    } else {
+        [(b, a), (a, b)]
+    }
+}
+
+/// The collapses of `x` onto `a` and onto `b`, the nearer first.
+pub(super) fn nearer_first(s: &State, x: u32, a: u32, b: u32) -> [(u32, u32); 2] {
+    if s.len(x, b) < s.len(x, a) {
+        [(x, b), (x, a)]
+    } else {
+        [(x, a), (x, b)]
+    }
+}
+
+/// Makes the first of the (gone, kept) collapses `tries` that [`may_collapse`] allows; returns
+/// the vertices whose one-ring changed (empty: none allowed).
+pub(super) fn collapse_first(
+    s: &mut State,
+    topo: &Topo,
+    tries: [(u32, u32); 2],
+    rules: &Rules,
+    purpose: Purpose,
+) -> Vec<u32> {
+    tries
+        .into_iter()
+        .find(|&(g, k)| may_collapse(s, topo, g, k, rules, purpose))
+        .map_or_else(Vec::new, |(g, k)| collapse(s, topo, g, k))
+}
+
 /// Merges `gone` into `kept`: the triangles on their edge die, the others of `gone` take
 /// `kept`. Returns the vertices whose one-ring changed (both ends and their neighbours).
-pub(super) fn collapse(s: &mut State, topo: &Topo, gone: u32, kept: u32) -> Vec<u32> {
+fn collapse(s: &mut State, topo: &Topo, gone: u32, kept: u32) -> Vec<u32> {
     let changed: Vec<u32> = topo
         .neighbours(s, gone)
         .into_iter()
@@ -65,41 +96,29 @@ pub(super) fn collapse(s: &mut State, topo: &Topo, gone: u32, kept: u32) -> Vec<
     changed
 }
 
-/// Whether triangle `t` is a sliver: an angle under [`super::cleanup::SLIVER_DEG`] (or over
-/// 180 degrees less that), so that its normal is no guide to its region's.
-pub(super) fn is_sliver(s: &State, t: &[u32; 3]) -> bool {
-    let area2 = s.normal(t).norm();
-    let [a, b, c] = *t;
-    let (la, lb, lc) = (s.len(b, c), s.len(c, a), s.len(a, b));
-    // 2 area = l1 l2 sin(angle between them), for the angle at each vertex.
-    let sin_min = [lb * lc, lc * la, la * lb]
-        .into_iter()
-        .map(|p| if p > 0.0 { area2 / p } else { 0.0 })
-        .fold(f64::INFINITY, f64::min);
-    sin_min < super::cleanup::SLIVER_DEG.to_radians().sin()
-}
-
-/// Which collapses are asked for.
+/// What a collapse is for, which sets the rules it keeps.
 #[derive(Clone, Copy, PartialEq)]
-pub(super) enum Lengths {
+pub(super) enum Purpose {
     /// The remeshing's: no edge made longer than 4/3 of its target.
-    Bounded,
-    /// The clean-up of slivers ([`super::cleanup`]): edges of any length.
-    Free,
-    /// The clean-up of a crease's hairpin ([`super::cleanup`]): edges of any length, and the
+    Remesh,
+    /// The clean-up of slivers ([`super::cleanup`]): edges of any length, and a sliver's
+    /// turn judged against its vertex's one-ring.
+    Sliver,
+    /// The clean-up of a crease's hairpin ([`super::cleanup`]): as for a sliver, and the
     /// crease vertex `gone` may fold its other crease edge onto the triangle it spans with
-    /// them (the hairpin's ear, which the collapse removes).
+    /// them (the hairpin's ear, which the collapse removes), and may leave a sliver along the
+    /// straightened crease.
     Hairpin,
 }
 
-/// Whether `gone` may collapse onto `kept` (module doc), within the edge lengths `lengths`.
+/// Whether `gone` may collapse onto `kept` (module doc) for `purpose`.
 pub(super) fn may_collapse(
     s: &State,
     topo: &Topo,
     gone: u32,
     kept: u32,
     rules: &Rules,
-    lengths: Lengths,
+    purpose: Purpose,
 ) -> bool {
     let fs = topo.edges[&key(gone, kept)];
     let crease_edge = s.is_crease(&fs);
@@ -125,7 +144,7 @@ pub(super) fn may_collapse(
         return false;
     }
     // A crease vertex's other crease edge must not fold onto an edge of a triangle it spans.
-    if lengths != Lengths::Hairpin
+    if purpose != Purpose::Hairpin
         && topo.kind[gone as usize] == Kind::Crease
         && topo
             .crease_neighbours(s, gone)
@@ -136,30 +155,30 @@ pub(super) fn may_collapse(
     }
     let pk = s.pos[kept as usize];
     let cos_max_turn = std::f64::consts::FRAC_1_SQRT_2;
-    // Freed lengths serve the clean-up of slivers, whose own normals are no guide: a sliver
-    // is judged against the area-weighted normal of `gone`'s one-ring instead.
-    let ring: nalgebra::Vector3<f64> = topo.vfaces[gone as usize]
-        .iter()
-        .map(|&f| s.normal(&s.tris[f as usize]))
-        .sum();
     for &f in &topo.vfaces[gone as usize] {
         let t = s.tris[f as usize];
         if t.contains(&kept) {
             continue;
         }
-        let mut old = s.normal(&t);
-        if lengths != Lengths::Bounded && is_sliver(s, &t) {
-            old = ring;
-        }
+        // In the clean-up, a sliver's own normal is no guide: it is judged against the
+        // area-weighted normal of `gone`'s one-ring instead.
+        let old = if purpose != Purpose::Remesh && is_sliver(s, &t) {
+            topo.vfaces[gone as usize]
+                .iter()
+                .map(|&h| s.normal(&s.tris[h as usize]))
+                .sum()
+        } else {
+            s.normal(&t)
+        };
         let moved = t.map(|v| if v == gone { kept } else { v });
         let new = s.normal(&moved);
         // Undoing a hairpin may leave a sliver along the straightened crease for the next
         // pass of the clean-up, not a fold.
-        let sliver_left = lengths == Lengths::Hairpin && is_sliver(s, &moved);
+        let sliver_left = purpose == Purpose::Hairpin && is_sliver(s, &moved);
         if !sliver_left && new.dot(&old) <= cos_max_turn * new.norm() * old.norm() {
             return false;
         }
-        if lengths == Lengths::Bounded
+        if purpose == Purpose::Remesh
             && t.iter().any(|&v| {
                 v != gone
                     && (s.pos[v as usize] - pk).norm() > 4.0 / 3.0 * rules.edge_target(s, kept, v)

@@ -212,6 +212,18 @@ fn key(a: u32, b: u32) -> (u32, u32) {
 }
 
 impl State {
+    /// All of `mesh` alive, nothing pinned, no sizes yet.
+    fn new(mesh: &LabelledMesh) -> State {
+        State {
+            pos: mesh.positions.clone(),
+            tris: mesh.triangles.clone(),
+            labels: mesh.labels.clone(),
+            alive: vec![true; mesh.triangles.len()],
+            pinned: vec![false; mesh.positions.len()],
+            size: Vec::new(),
+        }
+    }
+
     fn topo(&self) -> Topo {
         let mut edges: HashMap<(u32, u32), [u32; 2]> = HashMap::new();
         let mut vfaces = vec![Vec::new(); self.pos.len()];
@@ -359,14 +371,7 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
         )));
     }
     check_manifold(mesh)?;
-    let mut s = State {
-        pos: mesh.positions.clone(),
-        tris: mesh.triangles.clone(),
-        labels: mesh.labels.clone(),
-        alive: vec![true; mesh.triangles.len()],
-        pinned: vec![false; mesh.positions.len()],
-        size: Vec::new(),
-    };
+    let mut s = State::new(mesh);
     // The input's creases (projection targets) and its pinned turns.
     let topo = s.topo();
     let mut creases = Vec::new();

@@ -448,14 +448,11 @@ fn folding_moves_are_undone() {
         pos.push(Point3::new(a.cos(), a.sin(), 0.0));
     }
     let tris: Vec<[u32; 3]> = (0..6).map(|k| [0, 1 + k, 1 + (k + 1) % 6]).collect();
-    let mut s = State {
-        pos: pos.clone(),
+    let mut s = State::new(&LabelledMesh {
+        positions: pos.clone(),
         labels: vec![0; tris.len()],
-        alive: vec![true; tris.len()],
-        pinned: vec![false; pos.len()],
-        size: Vec::new(),
-        tris,
-    };
+        triangles: tris,
+    });
     // The centre a little off: no triangle turns.
     s.pos[0] = Point3::new(0.2, 0.1, 0.0);
     assert_eq!(undo_folds(&mut s, &pos), 0);
