@@ -11,7 +11,12 @@
 //! Regions smaller than `min_faces` triangles, or narrower than `min_width` mean edge lengths
 //! (area over half the perimeter), are merged into the neighbour with which they share the
 //! longest boundary, smallest first: a ring of faces cut out by noise, or the one-triangle-wide
-//! strips a fillet of radius about the edge length falls into.
+//! strips a fillet of radius about the edge length falls into. With a prior labelling of the
+//! faces ([`segment_mesh_hinted`]: the regions the input data were segmented into, seen from a
+//! mesh made later, e.g. the sharp implicit's), a narrow region that is not tiny is kept when
+//! most of its faces carry a prior label other than the one most of its neighbour's faces
+//! carry: a true face narrower than 1.5 edges of a coarse mesh (make_parts' stepped shaft: the
+//! 3 mm wall where a flat cuts a cylinder, on a mesh of 1 mm edges), not a strip of noise.
 
 use super::merge::{merge_smooth, Boundaries, Labelled};
 use super::union_find::DisjointSets;
@@ -68,6 +73,16 @@ pub struct MeshLabels {
 
 /// Segments the faces of `mesh` into smooth regions.
 pub fn segment_mesh(mesh: &Mesh, opt: &MeshOptions) -> Result<MeshLabels> {
+    segment_mesh_hinted(mesh, opt, None)
+}
+
+/// [`segment_mesh`], with `hint` a prior label per face (module doc): a narrow region whose
+/// faces mostly carry another prior label than its neighbour's is not absorbed.
+pub fn segment_mesh_hinted(
+    mesh: &Mesh,
+    opt: &MeshOptions,
+    hint: Option<&[u32]>,
+) -> Result<MeshLabels> {
     let adj = Adjacency::build(mesh)?;
     let nf = mesh.faces.len();
     let normals: Vec<Option<Vector3<f64>>> = (0..nf)
@@ -115,22 +130,29 @@ pub fn segment_mesh(mesh: &Mesh, opt: &MeshOptions) -> Result<MeshLabels> {
                 *border.entry((a.min(b), a.max(b))).or_default() += len;
             }
         }
-        let small = |r: usize| {
-            faces[r] < opt.min_faces
-                || (perimeter[r] > 0.0
-                    && area[r] / (0.5 * perimeter[r]) < opt.min_width * mean_edge)
+        let tiny = |r: usize| faces[r] < opt.min_faces;
+        let narrow = |r: usize| {
+            perimeter[r] > 0.0 && area[r] / (0.5 * perimeter[r]) < opt.min_width * mean_edge
+        };
+        // The neighbour sharing the longest boundary.
+        let into = |r: u32| {
+            border
+                .iter()
+                .filter(|(k, _)| k.0 == r || k.1 == r)
+                .max_by(|x, y| x.1.total_cmp(y.1).then(y.0.cmp(x.0)))
+                .map(|(k, _)| if k.0 == r { k.1 } else { k.0 })
+        };
+        let prior = hint.map(|h| prior_majorities(h, &label, count));
+        let distinct = |r: usize| match (&prior, into(r as u32)) {
+            (Some(m), Some(n)) => m[r].is_some() && m[r] != m[n as usize],
+            _ => false,
         };
         let victim = (0..count)
-            .filter(|&r| small(r) && perimeter[r] > 0.0)
+            .filter(|&r| perimeter[r] > 0.0 && (tiny(r) || (narrow(r) && !distinct(r))))
             .min_by(|&a, &b| area[a].total_cmp(&area[b]).then(a.cmp(&b)));
         let Some(r) = victim else { break };
         let r = r as u32;
-        let into = border
-            .iter()
-            .filter(|(k, _)| k.0 == r || k.1 == r)
-            .max_by(|x, y| x.1.total_cmp(y.1).then(y.0.cmp(x.0)))
-            .map(|(k, _)| if k.0 == r { k.1 } else { k.0 });
-        let Some(into) = into else { break };
+        let Some(into) = into(r) else { break };
         let mut sets = DisjointSets::new(count);
         sets.union(r, into);
         let (map, c) = sets.labels();
@@ -216,6 +238,24 @@ pub fn segment_mesh(mesh: &Mesh, opt: &MeshOptions) -> Result<MeshLabels> {
     })
 }
 
+/// Per region, the prior label (`hint`) that at least half of its faces carry, if any.
+fn prior_majorities(hint: &[u32], label: &[u32], regions: usize) -> Vec<Option<u32>> {
+    let mut counts: Vec<BTreeMap<u32, usize>> = vec![BTreeMap::new(); regions];
+    for (&h, &l) in hint.iter().zip(label) {
+        *counts[l as usize].entry(h).or_default() += 1;
+    }
+    counts
+        .iter()
+        .map(|c| {
+            let total: usize = c.values().sum();
+            c.iter()
+                .max_by(|x, y| x.1.cmp(y.1).then(y.0.cmp(x.0)))
+                .filter(|&(_, &n)| 2 * n >= total)
+                .map(|(&h, _)| h)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -263,6 +303,66 @@ mod tests {
             normals: None,
             faces,
         }
+    }
+
+    /// A step: the floor z = 0 for x < 0, a wall x = 0 one edge high, the top z = 1 for x > 0,
+    /// all 10 long in y, in unit squares cut into two triangles each.
+    fn step() -> Mesh {
+        let profile: Vec<(f64, f64)> = (-5..=0)
+            .map(|x| (x as f64, 0.0))
+            .chain((0..=5).map(|x| (x as f64, 1.0)))
+            .collect();
+        let n = profile.len() as u32;
+        let mut positions = Vec::new();
+        for y in 0..=10 {
+            for &(x, z) in &profile {
+                positions.push(Point3::new(x, y as f64, z));
+            }
+        }
+        let mut faces = Vec::new();
+        for y in 0..10 {
+            for i in 0..n - 1 {
+                let (a, b) = (y * n + i, y * n + i + 1);
+                let (c, d) = (a + n, b + n);
+                faces.push([a, b, d]);
+                faces.push([a, d, c]);
+            }
+        }
+        Mesh {
+            positions,
+            normals: None,
+            faces,
+        }
+    }
+
+    #[test]
+    fn a_narrow_face_is_absorbed_unless_the_prior_labels_tell_it_apart() {
+        let m = step();
+        // Without a prior labelling the one-edge-high wall (20 triangles) is too narrow.
+        assert_eq!(
+            segment_mesh(&m, &MeshOptions::default()).unwrap().regions,
+            2
+        );
+        // The input data's regions: floor, wall, top.
+        let hint: Vec<u32> = (0..m.faces.len())
+            .map(|f| {
+                let c = m.face_centroid(f);
+                if c.x.abs() < 1e-9 {
+                    1
+                } else if c.x < 0.0 {
+                    0
+                } else {
+                    2
+                }
+            })
+            .collect();
+        let l = segment_mesh_hinted(&m, &MeshOptions::default(), Some(&hint)).unwrap();
+        assert_eq!(l.regions, 3);
+        assert_eq!(l.pairs.len(), 2);
+        // A prior labelling that does not tell the wall apart changes nothing.
+        let same = vec![0; m.faces.len()];
+        let l = segment_mesh_hinted(&m, &MeshOptions::default(), Some(&same)).unwrap();
+        assert_eq!(l.regions, 2);
     }
 
     #[test]

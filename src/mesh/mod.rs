@@ -118,6 +118,11 @@ impl Mesh {
     pub fn face_area(&self, f: usize) -> f64 {
         0.5 * self.face_cross(f).norm()
     }
+    /// Centroid of triangle `f`.
+    pub fn face_centroid(&self, f: usize) -> Point3<f64> {
+        let [a, b, c] = self.faces[f].map(|v| self.positions[v as usize]);
+        Point3::from((a.coords + b.coords + c.coords) / 3.0)
+    }
     /// (b - a) x (c - a) of face `f`: twice its area times its unit normal.
     pub fn face_cross(&self, f: usize) -> Vector3<f64> {
         let [a, b, c] = self.faces[f];

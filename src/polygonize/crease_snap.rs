@@ -14,6 +14,18 @@
 //! and turns none of the triangles around the vertex over (each keeps its normal within 90
 //! degrees of what it was, and its area). A vertex moves once; the edges are visited in the
 //! order of the faces, so the result does not depend on the thread count.
+//!
+//! **Spikes** (first). Marching cubes can leave a vertex of region B a whole cell from the
+//! crease, between two crease points the split did put in, with only vertices of region A
+//! between them around it (at a concave crease, whose inner corner the cubes' triangles cut:
+//! make_parts' stepped shaft at its x = 65 shoulder, vertices 1.06 mm along the axis from the
+//! crease, with 1.45 mm edges across it). The crease then runs from one crease point out to
+//! the vertex and back to the next, and the crease-aligned net follows it (crease distance
+//! 2.9e-3 of the diagonal there). Such a vertex, an end of an edge across the crease with two
+//! or more crease points among its neighbours, moves onto the crease point found from the
+//! chord between the nearest two (its projection onto it; from the vertex itself, a cell off,
+//! the other side's function may no longer be continued), when that is no further from it than
+//! the second of them.
 
 use super::crease_split::{crossing_edges, meet_point, tri_normal, CreaseSplitOptions, SideField};
 use crate::mesh::Mesh;
@@ -35,6 +47,7 @@ pub fn snap_to_creases(
     opts: &CreaseSplitOptions,
 ) -> usize {
     let crossing = crossing_edges(&mesh.faces, label, first_new);
+    let spikes = spike_moves(mesh, field, label, first_new, &crossing, opts);
     let pos = &mesh.positions;
     // Per edge: the end to move and where, if within reach.
     let moves: Vec<Option<(u32, Point3<f64>)>> = crossing
@@ -57,13 +70,75 @@ pub fn snap_to_creases(
     let ring = face_rings(mesh);
     let mut moved = vec![false; mesh.positions.len()];
     let mut count = 0;
-    for (v, c) in moves.into_iter().flatten() {
+    for (v, c) in spikes.into_iter().chain(moves.into_iter().flatten()) {
         if !moved[v as usize] && move_unfolded(mesh, &ring, v, c) {
             moved[v as usize] = true;
             count += 1;
         }
     }
     count
+}
+
+/// The spikes' moves (module doc): per vertex before `first_new` with an edge across a crease
+/// (`crossing`) and two or more crease points among its neighbours, the crease point found from
+/// its projection onto the chord between the nearest two, if no further than the second.
+fn spike_moves(
+    mesh: &Mesh,
+    field: &dyn SideField,
+    label: &[u32],
+    first_new: usize,
+    crossing: &[(u32, u32)],
+    opts: &CreaseSplitOptions,
+) -> Vec<(u32, Point3<f64>)> {
+    let pos = &mesh.positions;
+    let mut creased: Vec<Vec<u32>> = vec![Vec::new(); first_new];
+    for f in &mesh.faces {
+        for k in 0..3 {
+            let (v, w) = (f[k], f[(k + 1) % 3]);
+            for (v, w) in [(v, w), (w, v)] {
+                if (v as usize) < first_new && w as usize >= first_new {
+                    let c = &mut creased[v as usize];
+                    if !c.contains(&w) {
+                        c.push(w);
+                    }
+                }
+            }
+        }
+    }
+    // The region across each vertex's crossing edges (None: none, or two: a corner).
+    let mut across: Vec<Option<Option<u32>>> = vec![None; first_new];
+    for &(a, b) in crossing {
+        for (v, w) in [(a, b), (b, a)] {
+            let r = label[w as usize];
+            let e = &mut across[v as usize];
+            *e = match *e {
+                None => Some(Some(r)),
+                Some(Some(s)) if s == r => Some(Some(r)),
+                _ => Some(None),
+            };
+        }
+    }
+    (0..first_new)
+        .into_par_iter()
+        .filter_map(|v| {
+            let other = across[v]??;
+            let p = pos[v];
+            let mut near: Vec<(f64, u32)> = creased[v]
+                .iter()
+                .map(|&c| ((pos[c as usize] - p).norm(), c))
+                .collect();
+            if near.len() < 2 {
+                return None;
+            }
+            near.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+            let (a, b) = (pos[near[0].1 as usize], pos[near[1].1 as usize]);
+            let ab = b - a;
+            let t = ((p - a).dot(&ab) / ab.norm_squared().max(1e-300)).clamp(0.0, 1.0);
+            let reach = near[1].0;
+            let c = meet_point(field, &[label[v], other], a + ab * t, reach, opts)?;
+            ((c - p).norm() <= reach).then_some((v as u32, c))
+        })
+        .collect()
 }
 
 /// The faces around each vertex, for [`move_unfolded`].
@@ -145,6 +220,33 @@ mod tests {
         // The far vertices stay.
         assert_eq!(m.positions[0], Point3::new(-1.0, 0.0, -1.0));
         assert_eq!(m.positions[3], Point3::new(1.0, 1.0, -1.0));
+    }
+
+    #[test]
+    fn a_spike_between_two_crease_points_moves_onto_the_crease() {
+        // Vertex 0 on region 1, 0.8 from the crease, fanned by crease points 4 and 5 on it and
+        // vertex 1 of region 0 between them: the crease ran 4 - 0 - 5.
+        let on = |x: f64, y: f64| Point3::new(x, y, -x.abs());
+        let mut m = Mesh {
+            positions: vec![
+                on(0.8, 0.5),
+                on(-1.0, 0.5),
+                on(1.0, 1.5),
+                on(1.0, -0.5),
+                on(0.0, 0.0),
+                on(0.0, 1.0),
+            ],
+            faces: vec![[0, 4, 1], [0, 1, 5], [0, 5, 2], [0, 2, 3], [0, 3, 4]],
+            ..Default::default()
+        };
+        let label = [1, 0, 1, 1];
+        let opts = CreaseSplitOptions::default();
+        // 1.13 from the crease: too far for the snap of its edge across it (half of 1.81).
+        let n = snap_to_creases(&mut m, &Roof, &label, 4, &opts);
+        assert_eq!(n, 1);
+        let p = m.positions[0];
+        assert!((p - Point3::new(0.0, 0.5, 0.0)).norm() < 1e-6, "{p}");
+        assert_eq!(m.positions[1], on(-1.0, 0.5));
     }
 
     #[test]

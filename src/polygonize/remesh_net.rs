@@ -30,10 +30,12 @@ use super::quad_net::QuadNet;
 use super::quad_split::{split_into_quads, NodeKind};
 use super::side_projection::{project_onto_sides, region_map, SideProjectionReport};
 use crate::error::Result;
+use crate::features::segment_mesh::segment_mesh_hinted;
 use crate::implicit::Implicit;
 use crate::mesh::crease_remesh::{remesh, LabelledMesh, RemeshOptions};
 use crate::mesh::unfold::{unfold, UnfoldReport};
 use crate::mesh::Mesh;
+use rayon::prelude::*;
 
 /// Longest move of a node onto the sides, in target edge lengths L (a net edge is L / 2).
 pub const MAX_MOVE: f64 = 0.25;
@@ -117,7 +119,15 @@ pub fn remesh_net<I: Implicit + ?Sized>(
     open: bool,
     opts: &RemeshNetOptions,
 ) -> Result<RemeshNet> {
-    let seg = crate::features::segment_mesh::segment_mesh(mesh, &Default::default())?;
+    // The sides' regions (the input data's segmentation) keep a true face narrower than the
+    // mesh's edges from being absorbed by its neighbour.
+    let hint: Option<Vec<u32>> = sides.map(|field| {
+        (0..mesh.faces.len())
+            .into_par_iter()
+            .map(|f| field.region(&mesh.face_centroid(f)))
+            .collect()
+    });
+    let seg = segment_mesh_hinted(mesh, &Default::default(), hint.as_deref())?;
     let area: f64 = (0..mesh.faces.len()).map(|f| mesh.face_area(f)).sum();
     let per_triangle = 3f64.sqrt() / 4.0;
     let target = (3.0 * area / (per_triangle * opts.quads.max(1) as f64)).sqrt();
