@@ -23,9 +23,9 @@
 //! the vertex and back to the next, and the crease-aligned net follows it (crease distance
 //! 2.9e-3 of the diagonal there). Such a vertex, an end of an edge across the crease with two
 //! or more crease points among its neighbours, moves onto the crease point found from the
-//! chord between the nearest two (its projection onto it; from the vertex itself, a cell off,
-//! the other side's function may no longer be continued), when that is no further from it than
-//! the second of them.
+//! nearest chord between two of them onto which it projects inside (from its projection; from
+//! the vertex itself, a cell off, the other side's function may no longer be continued), when
+//! that is no further from it than the chord's farther end.
 
 use super::crease_split::{crossing_edges, meet_point, tri_normal, CreaseSplitOptions, SideField};
 use crate::mesh::Mesh;
@@ -81,7 +81,8 @@ pub fn snap_to_creases(
 
 /// The spikes' moves (module doc): per vertex before `first_new` with an edge across a crease
 /// (`crossing`) and two or more crease points among its neighbours, the crease point found from
-/// its projection onto the chord between the nearest two, if no further than the second.
+/// its projection onto the nearest chord between two of them ([`chord_start`]), if no further
+/// than the chord's farther end.
 fn spike_moves(
     mesh: &Mesh,
     field: &dyn SideField,
@@ -123,22 +124,33 @@ fn spike_moves(
         .filter_map(|v| {
             let other = across[v]??;
             let p = pos[v];
-            let mut near: Vec<(f64, u32)> = creased[v]
-                .iter()
-                .map(|&c| ((pos[c as usize] - p).norm(), c))
-                .collect();
-            if near.len() < 2 {
-                return None;
-            }
-            near.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-            let (a, b) = (pos[near[0].1 as usize], pos[near[1].1 as usize]);
-            let ab = b - a;
-            let t = ((p - a).dot(&ab) / ab.norm_squared().max(1e-300)).clamp(0.0, 1.0);
-            let reach = near[1].0;
-            let c = meet_point(field, &[label[v], other], a + ab * t, reach, opts)?;
+            let (start, reach) = chord_start(p, &creased[v], pos)?;
+            let c = meet_point(field, &[label[v], other], start, reach, opts)?;
             ((c - p).norm() <= reach).then_some((v as u32, c))
         })
         .collect()
+}
+
+/// Of the chords between two of the crease points `creased` around a spike at `p`, the nearest
+/// to it onto which it projects inside: the projection, and the farther end's distance from p.
+fn chord_start(p: Point3<f64>, creased: &[u32], pos: &[Point3<f64>]) -> Option<(Point3<f64>, f64)> {
+    let mut best: Option<(f64, Point3<f64>, f64)> = None;
+    for (i, &ci) in creased.iter().enumerate() {
+        for &cj in &creased[i + 1..] {
+            let (a, b) = (pos[ci as usize], pos[cj as usize]);
+            let ab = b - a;
+            let t = (p - a).dot(&ab) / ab.norm_squared().max(1e-300);
+            if !(0.0..=1.0).contains(&t) {
+                continue;
+            }
+            let x = a + ab * t;
+            let d = (p - x).norm();
+            if best.is_none_or(|b| d < b.0) {
+                best = Some((d, x, (a - p).norm().max((b - p).norm())));
+            }
+        }
+    }
+    best.map(|(_, x, reach)| (x, reach))
 }
 
 /// The faces around each vertex, for [`move_unfolded`].
