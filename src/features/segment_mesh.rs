@@ -14,9 +14,11 @@
 //! strips a fillet of radius about the edge length falls into. With a prior labelling of the
 //! faces ([`segment_mesh_hinted`]: the regions the input data were segmented into, seen from a
 //! mesh made later, e.g. the sharp implicit's), a narrow region that is not tiny is kept when
-//! most of its faces carry a prior label other than the one most of its neighbour's faces
-//! carry: a true face narrower than 1.5 edges of a coarse mesh (make_parts' stepped shaft: the
-//! 3 mm wall where a flat cuts a cylinder, on a mesh of 1 mm edges), not a strip of noise.
+//! it and the neighbour it would be merged into (the one sharing its longest boundary) each
+//! have a majority prior label (carried by at least half of their faces, a tie going to the
+//! smaller label) and these differ: a true face narrower than 1.5 edges of a coarse mesh
+//! (make_parts' stepped shaft: the 3 mm wall where a flat cuts a cylinder, on a mesh of 1 mm
+//! edges), not a strip of noise. A kept region is judged again after every merge.
 
 use super::merge::{merge_smooth, Boundaries, Labelled};
 use super::union_find::DisjointSets;
@@ -77,12 +79,20 @@ pub fn segment_mesh(mesh: &Mesh, opt: &MeshOptions) -> Result<MeshLabels> {
 }
 
 /// [`segment_mesh`], with `hint` a prior label per face (module doc): a narrow region whose
-/// faces mostly carry another prior label than its neighbour's is not absorbed.
+/// faces mostly carry another prior label than its neighbour's is not absorbed. Fails when
+/// `hint` does not hold one label per face.
 pub fn segment_mesh_hinted(
     mesh: &Mesh,
     opt: &MeshOptions,
     hint: Option<&[u32]>,
 ) -> Result<MeshLabels> {
+    if let Some(h) = hint.filter(|h| h.len() != mesh.faces.len()) {
+        return Err(crate::Error::InvalidOption(format!(
+            "segment_mesh: {} prior labels for {} faces",
+            h.len(),
+            mesh.faces.len()
+        )));
+    }
     let adj = Adjacency::build(mesh)?;
     let nf = mesh.faces.len();
     let normals: Vec<Option<Vector3<f64>>> = (0..nf)
@@ -144,7 +154,7 @@ pub fn segment_mesh_hinted(
         };
         let prior = hint.map(|h| prior_majorities(h, &label, count));
         let distinct = |r: usize| match (&prior, into(r as u32)) {
-            (Some(m), Some(n)) => m[r].is_some() && m[r] != m[n as usize],
+            (Some(m), Some(n)) => matches!((m[r], m[n as usize]), (Some(a), Some(b)) if a != b),
             _ => false,
         };
         let victim = (0..count)
@@ -360,6 +370,8 @@ mod tests {
         assert_eq!(l.regions, 3);
         assert_eq!(l.pairs.len(), 2);
         // A prior labelling that does not tell the wall apart changes nothing.
+        // A prior labelling of another mesh is refused.
+        assert!(segment_mesh_hinted(&m, &MeshOptions::default(), Some(&hint[1..])).is_err());
         let same = vec![0; m.faces.len()];
         let l = segment_mesh_hinted(&m, &MeshOptions::default(), Some(&same)).unwrap();
         assert_eq!(l.regions, 2);

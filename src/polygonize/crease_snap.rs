@@ -12,8 +12,9 @@
 //! (Gauss-Newton on f_A = f_B = 0 from the end, [`super::crease_split::meet_point`]); the end
 //! nearer to its crease point moves onto it when that is within [`SNAP`] of the edge's length
 //! and turns none of the triangles around the vertex over (each keeps its normal within 90
-//! degrees of what it was, and its area). A vertex moves once; the edges are visited in the
-//! order of the faces, so the result does not depend on the thread count.
+//! degrees of what it was, and its area). A vertex moves once; the spikes (below) move first,
+//! then the edges' ends in the order of the faces, an edge one of whose ends moved as a spike
+//! being left as it is; so the result does not depend on the thread count.
 //!
 //! **Spikes** (first). Marching cubes can leave a vertex of region B a whole cell from the
 //! crease, between two crease points the split did put in, with only vertices of region A
@@ -49,8 +50,8 @@ pub fn snap_to_creases(
     let crossing = crossing_edges(&mesh.faces, label, first_new);
     let spikes = spike_moves(mesh, field, label, first_new, &crossing, opts);
     let pos = &mesh.positions;
-    // Per edge: the end to move and where, if within reach.
-    let moves: Vec<Option<(u32, Point3<f64>)>> = crossing
+    // Per edge: the end to move, where, and the other end, if within reach.
+    let moves: Vec<Option<(u32, Point3<f64>, u32)>> = crossing
         .par_iter()
         .map(|&(a, b)| {
             let len = (pos[b as usize] - pos[a as usize]).norm();
@@ -64,14 +65,23 @@ pub fn snap_to_creases(
                     (d <= SNAP * len).then_some((d, v, c))
                 })
                 .min_by(|x, y| x.0.total_cmp(&y.0))
-                .map(|(_, v, c)| (v, c))
+                .map(|(_, v, c)| (v, c, if v == a { b } else { a }))
         })
         .collect();
     let ring = face_rings(mesh);
     let mut moved = vec![false; mesh.positions.len()];
+    let mut spiked = vec![false; mesh.positions.len()];
     let mut count = 0;
-    for (v, c) in spikes.into_iter().chain(moves.into_iter().flatten()) {
-        if !moved[v as usize] && move_unfolded(mesh, &ring, v, c) {
+    for (v, c) in spikes {
+        if move_unfolded(mesh, &ring, v, c) {
+            moved[v as usize] = true;
+            spiked[v as usize] = true;
+            count += 1;
+        }
+    }
+    // An edge one of whose ends moved onto the crease as a spike no longer crosses it there.
+    for (v, c, other) in moves.into_iter().flatten() {
+        if !moved[v as usize] && !spiked[other as usize] && move_unfolded(mesh, &ring, v, c) {
             moved[v as usize] = true;
             count += 1;
         }
@@ -106,7 +116,8 @@ fn spike_moves(
             }
         }
     }
-    // The region across each vertex's crossing edges (None: none, or two: a corner).
+    // The region across each vertex's crossing edges (None: no crossing edge; Some(None): two
+    // or more regions, a corner).
     let mut across: Vec<Option<Option<u32>>> = vec![None; first_new];
     for &(a, b) in crossing {
         for (v, w) in [(a, b), (b, a)] {
@@ -236,7 +247,7 @@ mod tests {
 
     #[test]
     fn a_spike_between_two_crease_points_moves_onto_the_crease() {
-        // Vertex 0 on region 1, 0.8 from the crease, fanned by crease points 4 and 5 on it and
+        // Vertex 0 on region 1, 1.13 from the crease, fanned by crease points 4 and 5 on it and
         // vertex 1 of region 0 between them: the crease ran 4 - 0 - 5.
         let on = |x: f64, y: f64| Point3::new(x, y, -x.abs());
         let mut m = Mesh {
@@ -253,7 +264,7 @@ mod tests {
         };
         let label = [1, 0, 1, 1];
         let opts = CreaseSplitOptions::default();
-        // 1.13 from the crease: too far for the snap of its edge across it (half of 1.81).
+        // Too far for the snap of its edge across the crease (half of 1.81).
         let n = snap_to_creases(&mut m, &Roof, &label, 4, &opts);
         assert_eq!(n, 1);
         let p = m.positions[0];
