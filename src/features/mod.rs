@@ -446,9 +446,8 @@ fn segment_faces(mesh: &Mesh, op: &OrientedPoints, opts: &MeshOptions) -> Result
                 region.normals.push(vn[i]);
             }
         }
-        for f in &sub.faces {
-            let c = f.map(|v| sub.positions[v as usize].coords);
-            label_points.push(Point3::from((c[0] + c[1] + c[2]) / 3.0));
+        for f in 0..sub.faces.len() {
+            label_points.push(sub.face_centroid(f));
             label_of.push(r);
         }
         for (i, p) in sub.positions.iter().enumerate() {

@@ -369,9 +369,9 @@ mod tests {
         let l = segment_mesh_hinted(&m, &MeshOptions::default(), Some(&hint)).unwrap();
         assert_eq!(l.regions, 3);
         assert_eq!(l.pairs.len(), 2);
-        // A prior labelling that does not tell the wall apart changes nothing.
         // A prior labelling of another mesh is refused.
         assert!(segment_mesh_hinted(&m, &MeshOptions::default(), Some(&hint[1..])).is_err());
+        // A prior labelling that does not tell the wall apart changes nothing.
         let same = vec![0; m.faces.len()];
         let l = segment_mesh_hinted(&m, &MeshOptions::default(), Some(&same)).unwrap();
         assert_eq!(l.regions, 2);

@@ -70,15 +70,14 @@ pub fn snap_to_creases(
         .collect();
     let ring = face_rings(mesh);
     let mut moved = vec![false; mesh.positions.len()];
-    let mut spiked = vec![false; mesh.positions.len()];
     let mut count = 0;
     for (v, c) in spikes {
         if move_unfolded(mesh, &ring, v, c) {
             moved[v as usize] = true;
-            spiked[v as usize] = true;
             count += 1;
         }
     }
+    let spiked = moved.clone();
     // An edge one of whose ends moved onto the crease as a spike no longer crosses it there.
     for (v, c, other) in moves.into_iter().flatten() {
         if !moved[v as usize] && !spiked[other as usize] && move_unfolded(mesh, &ring, v, c) {

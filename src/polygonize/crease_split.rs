@@ -219,7 +219,7 @@ pub fn split_at_creases(
         .map(|&i| {
             let f = mesh.faces[i];
             let p = f.map(|v| mesh.positions[v as usize]);
-            let centre = Point3::from((p[0].coords + p[1].coords + p[2].coords) / 3.0);
+            let centre = mesh.face_centroid(i);
             let scale = (p[1] - p[0])
                 .norm()
                 .max((p[2] - p[1]).norm())
