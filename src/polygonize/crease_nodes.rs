@@ -106,6 +106,16 @@ impl Default for CreaseNodeOptions {
 pub trait LocalSides: Sync {
     /// The surfaces of `regions` around `x`, or `None` when one of them cannot be fitted there.
     fn near(&self, x: &Point3<f64>, regions: &[u32]) -> Option<Box<dyn SideField + Send + Sync>>;
+    /// [`LocalSides::near`], but only when each region's surface fitted to the data follows its
+    /// points about as well as `reference`'s side of that region does (`scale`: the net's edge
+    /// length; the implementation says how close).
+    fn near_checked(
+        &self,
+        x: &Point3<f64>,
+        regions: &[u32],
+        reference: &dyn SideField,
+        scale: f64,
+    ) -> Option<Box<dyn SideField + Send + Sync>>;
     /// The region whose surface passes nearest to `x`, or `None` when none can be fitted.
     fn region(&self, x: &Point3<f64>) -> Option<u32>;
 }

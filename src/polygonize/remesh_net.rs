@@ -18,17 +18,20 @@
 //!    region, and no quad has three corners on one crease.
 //!
 //! 4. with the sharp implicit's sides given, the nodes (edge midpoints and centroids lie on
-//!    chords) are put onto them ([`super::side_projection`]).
+//!    chords) are put onto them ([`super::side_projection`]); with the data's local surfaces
+//!    given too, a crease or corner node goes between those where they follow their points
+//!    about as well as the implicit's sides, unless that folds a quad.
 //!
 //! The quad count: a triangle of edge L has area sqrt(3)/4 L^2 and gives three quads, so a
 //! surface of area A needs L = sqrt(3 A / (sqrt(3)/4 Q)) for Q quads (more where a crease's
 //! chord tolerance splits its edges).
 
+use super::crease_nodes::LocalSides;
 use super::crease_split::SideField;
-use super::net_quality::{net_quality, NetQuality};
+use super::net_quality::{folded_quads, net_quality, NetQuality};
 use super::quad_net::QuadNet;
 use super::quad_split::{split_into_quads, NodeKind};
-use super::side_projection::{project_onto_sides, region_map, SideProjectionReport};
+use super::side_projection::{project_onto_sides, region_map, SideProjectionReport, Sides};
 use crate::error::Result;
 use crate::features::segment_mesh::segment_mesh_hinted;
 use crate::implicit::Implicit;
@@ -95,6 +98,14 @@ pub struct RemeshNetReport {
     pub quality: NetQuality,
 }
 
+/// The remesh's target edge length for `quads` quads on `mesh`: three quads per equilateral
+/// triangle of that edge, the triangles covering the mesh's area.
+pub fn target_edge(mesh: &Mesh, quads: usize) -> f64 {
+    let area: f64 = (0..mesh.faces.len()).map(|f| mesh.face_area(f)).sum();
+    let per_triangle = 3f64.sqrt() / 4.0;
+    (3.0 * area / (per_triangle * quads.max(1) as f64)).sqrt()
+}
+
 /// The crease-aligned net and its labels.
 #[derive(Debug, Clone)]
 pub struct RemeshNet {
@@ -115,6 +126,7 @@ pub fn remesh_net<I: Implicit + ?Sized>(
     mesh: &Mesh,
     f: &I,
     sides: Option<&dyn SideField>,
+    data: Option<&dyn LocalSides>,
     diagonal: f64,
     open: bool,
     opts: &RemeshNetOptions,
@@ -128,9 +140,7 @@ pub fn remesh_net<I: Implicit + ?Sized>(
             .collect()
     });
     let seg = segment_mesh_hinted(mesh, &Default::default(), hint.as_deref())?;
-    let area: f64 = (0..mesh.faces.len()).map(|f| mesh.face_area(f)).sum();
-    let per_triangle = 3f64.sqrt() / 4.0;
-    let target = (3.0 * area / (per_triangle * opts.quads.max(1) as f64)).sqrt();
+    let target = target_edge(mesh, opts.quads);
     let mut ro = RemeshOptions::new(target);
     ro.iterations = opts.iterations;
     ro.crease_tolerance = Some(opts.crease_tolerance * diagonal);
@@ -152,9 +162,10 @@ pub fn remesh_net<I: Implicit + ?Sized>(
             &mut split.net,
             &split.quad_labels,
             &map,
-            field,
+            Sides { field, data },
             0.5 * target,
             MAX_MOVE * target,
+            &|net: &QuadNet| folded_quads(net, f, diagonal, 0.5 * target),
         )
     });
     let count = |k: NodeKind| split.node_kinds.iter().filter(|&&x| x == k).count();
@@ -263,9 +274,9 @@ mod tests {
                 .map(|p| Cylinder.value(p).abs())
                 .fold(0.0, f64::max)
         };
-        let plain = remesh_net(&mesh, &Cylinder, None, diag, false, &opts).unwrap();
+        let plain = remesh_net(&mesh, &Cylinder, None, None, diag, false, &opts).unwrap();
         assert!(off(&plain.net) > 1e-2, "{}", off(&plain.net));
-        let on = remesh_net(&mesh, &Cylinder, Some(&Cylinder), diag, false, &opts).unwrap();
+        let on = remesh_net(&mesh, &Cylinder, Some(&Cylinder), None, diag, false, &opts).unwrap();
         let r = &on.report;
         assert_eq!(r.regions, 3, "{r:?}");
         assert_eq!(r.corner_nodes, 0, "{r:?}");

@@ -15,6 +15,7 @@
 //! A move longer than `max_move` (or a solve that fails) is not made: the node stays where the
 //! remesh put it. Nodes of an open boundary are left alone.
 
+use super::crease_nodes::LocalSides;
 use super::crease_split::{meet_point, CreaseSplitOptions, SideField};
 use super::quad_net::{QuadNet, NO_QUAD};
 use nalgebra::Point3;
@@ -31,6 +32,11 @@ pub struct SideProjectionReport {
     /// Nodes left where they were (no converged solve within the reach, or two net regions
     /// on one side of the implicit beside a node of three).
     pub kept: usize,
+    /// Crease and corner nodes put between the regions' surfaces fitted to the data around
+    /// them (when given) rather than the implicit's sides, and those moves undone because
+    /// they folded a quad.
+    pub data_fitted: usize,
+    pub data_undone: usize,
     /// Largest move made, model units.
     pub max_move: f64,
 }
@@ -77,17 +83,37 @@ pub fn region_map(
         .collect()
 }
 
+/// Where one node goes: onto the implicit's sides, and onto the surfaces fitted to the data.
+#[derive(Clone, Copy)]
+struct Target {
+    implicit: Option<Point3<f64>>,
+    data: Option<Point3<f64>>,
+    /// Regions of the node's quads (1 face, 2 crease, 3 corner).
+    sides: usize,
+}
+
+/// Rounds of undoing the data-fitted moves that fold quads ([`project_onto_sides`]).
+const UNFOLD_ROUNDS: usize = 4;
+
 /// Moves the nodes of `net` (quads labelled `quad_region`, mapped to the field's regions by
 /// `map`) onto the sides of `field` (module doc); `scale` sets the solves' tolerance (the
-/// net's edge length), `max_move` the longest move made.
+/// net's edge length), `max_move` the longest move made. With `data`, crease and corner nodes
+/// go between the regions' surfaces fitted to the data around them where those follow their
+/// points about as well as the implicit's sides ([`LocalSides::near_checked`]): beside a crease
+/// the implicit's smooth cells round the last few tenths of a millimetre, where few points
+/// are, and its crease line runs inside the part. `folded` flags the net's folded quads: a
+/// data-fitted move that folds a quad not folded before the projection goes to the
+/// implicit's position instead (round after round, [`UNFOLD_ROUNDS`] at most).
 pub fn project_onto_sides(
     net: &mut QuadNet,
     quad_region: &[u32],
     map: &[u32],
-    field: &dyn SideField,
+    sides: Sides,
     scale: f64,
     max_move: f64,
+    folded: &dyn Fn(&QuadNet) -> Vec<bool>,
 ) -> SideProjectionReport {
+    let Sides { field, data } = sides;
     let opts = CreaseSplitOptions::default();
     let mut on_boundary = vec![false; net.nodes.len()];
     for (e, qs) in net.edges.iter().zip(&net.edge_quads) {
@@ -96,7 +122,7 @@ pub fn project_onto_sides(
             on_boundary[e[1] as usize] = true;
         }
     }
-    let moved: Vec<Option<(Point3<f64>, usize)>> = (0..net.nodes.len())
+    let targets: Vec<Option<Target>> = (0..net.nodes.len())
         .into_par_iter()
         .map(|i| {
             if on_boundary[i] {
@@ -109,30 +135,81 @@ pub fn project_onto_sides(
                 .collect();
             let sides: Vec<u32> = sides.into_iter().collect();
             let x = net.nodes[i];
-            let y = match sides.len() {
+            let near = |y: &Point3<f64>| (y - x).norm() <= max_move;
+            let data = if (2..=3).contains(&sides.len()) {
+                data.and_then(|d| d.near_checked(&x, &sides, field, scale))
+                    .and_then(|local| meet_point(local.as_ref(), &sides, x, scale, &opts))
+                    .filter(near)
+            } else {
+                None
+            };
+            let implicit = match sides.len() {
                 1 => onto_side(field, sides[0], x, scale, opts.tolerance),
                 2 | 3 => meet_point(field, &sides, x, scale, &opts),
                 _ => None,
-            }?;
-            ((y - x).norm() <= max_move).then_some((y, sides.len()))
+            }
+            .filter(near);
+            Some(Target {
+                implicit,
+                data,
+                sides: sides.len(),
+            })
         })
         .collect();
+    let start = net.nodes.clone();
+    let before = folded(net);
+    let mut use_data: Vec<bool> = targets
+        .iter()
+        .map(|t| t.is_some_and(|t| t.data.is_some()))
+        .collect();
+    let place = |net: &mut QuadNet, use_data: &[bool]| {
+        for (i, t) in targets.iter().enumerate() {
+            let y = t.and_then(|t| if use_data[i] { t.data } else { t.implicit });
+            net.nodes[i] = y.unwrap_or(start[i]);
+        }
+    };
+    place(net, &use_data);
     let mut report = SideProjectionReport::default();
-    for (i, m) in moved.into_iter().enumerate() {
-        match m {
-            Some((y, k)) => {
-                report.max_move = report.max_move.max((y - net.nodes[i]).norm());
-                net.nodes[i] = y;
-                match k {
+    for _ in 0..UNFOLD_ROUNDS {
+        let after = folded(net);
+        let mut undone = 0;
+        for (q, quad) in net.quads.iter().enumerate() {
+            if after[q] && !before[q] {
+                for &i in quad {
+                    undone += usize::from(std::mem::take(&mut use_data[i as usize]));
+                }
+            }
+        }
+        if undone == 0 {
+            break;
+        }
+        report.data_undone += undone;
+        place(net, &use_data);
+    }
+    for (i, t) in targets.iter().enumerate() {
+        let y = t.and_then(|t| if use_data[i] { t.data } else { t.implicit });
+        match (t, y) {
+            (Some(t), Some(y)) => {
+                report.max_move = report.max_move.max((y - start[i]).norm());
+                report.data_fitted += usize::from(use_data[i]);
+                match t.sides {
                     1 => report.face_nodes += 1,
                     2 => report.crease_nodes += 1,
                     _ => report.corner_nodes += 1,
                 }
             }
-            None => report.kept += 1,
+            _ => report.kept += 1,
         }
     }
     report
+}
+
+/// The surfaces [`project_onto_sides`] puts nodes on: the implicit's sides, and optionally
+/// the regions' surfaces fitted to the data around a node.
+#[derive(Clone, Copy)]
+pub struct Sides<'a> {
+    pub field: &'a dyn SideField,
+    pub data: Option<&'a dyn LocalSides>,
 }
 
 /// Newton's iteration onto f_region = 0 from `x`, or `None` when it does not converge to
