@@ -108,16 +108,32 @@ impl DataSides<'_> {
     fn fit(&self, x: &Point3<f64>, near: &[usize], r: u32) -> Option<LocalQuadric> {
         fit_region(*x, &self.region_points(near, r))
     }
+
+    /// The surfaces of `regions` fitted around `x`, or `None` when one cannot be fitted or
+    /// `accept` (region, its points, its surface) refuses one.
+    fn fitted(
+        &self,
+        x: &Point3<f64>,
+        regions: &[u32],
+        accept: impl Fn(u32, &[Point3<f64>], &LocalQuadric) -> bool,
+    ) -> Option<Box<dyn SideField + Send + Sync>> {
+        let near = self.near_points(x);
+        let mut fits = Vec::with_capacity(regions.len());
+        for &r in regions {
+            let pts = self.region_points(&near, r);
+            let q = fit_region(*x, &pts)?;
+            if !accept(r, &pts, &q) {
+                return None;
+            }
+            fits.push((r, q));
+        }
+        Some(Box::new(FittedSides { fits }))
+    }
 }
 
 impl LocalSides for DataSides<'_> {
     fn near(&self, x: &Point3<f64>, regions: &[u32]) -> Option<Box<dyn SideField + Send + Sync>> {
-        let near = self.near_points(x);
-        let mut fits = Vec::with_capacity(regions.len());
-        for &r in regions {
-            fits.push((r, self.fit(x, &near, r)?));
-        }
-        Some(Box::new(FittedSides { fits }))
+        self.fitted(x, regions, |_, _, _| true)
     }
 
     fn near_checked(
@@ -127,11 +143,7 @@ impl LocalSides for DataSides<'_> {
         reference: &dyn SideField,
         scale: f64,
     ) -> Option<Box<dyn SideField + Send + Sync>> {
-        let near = self.near_points(x);
-        let mut fits = Vec::with_capacity(regions.len());
-        for &r in regions {
-            let pts = self.region_points(&near, r);
-            let q = fit_region(*x, &pts)?;
+        self.fitted(x, regions, |r, pts, q| {
             let rms = |d: &dyn Fn(&Point3<f64>) -> f64| {
                 (pts.iter().map(|p| d(p).powi(2)).sum::<f64>() / pts.len() as f64).sqrt()
             };
@@ -141,13 +153,8 @@ impl LocalSides for DataSides<'_> {
                 f / g.norm().max(1e-300)
             });
             // (NaN, from a side without a gradient, refuses too.)
-            let follows = own <= MISFIT_RATIO * theirs + MISFIT_FLOOR * scale;
-            if !follows {
-                return None;
-            }
-            fits.push((r, q));
-        }
-        Some(Box::new(FittedSides { fits }))
+            own <= MISFIT_RATIO * theirs + MISFIT_FLOOR * scale
+        })
     }
 
     fn region(&self, x: &Point3<f64>) -> Option<u32> {
@@ -220,7 +227,8 @@ mod tests {
     use crate::mesh::Mesh;
     use crate::normals::oriented_points;
 
-    /// Planes x = a (region ra), y = b (rb), z = c (rc): a box's faces, shifted at will.
+    /// Axis-aligned planes, one per region: (region, axis k, offset a, sign s) is the side
+    /// s (x_k - a) (a box's faces, shifted at will).
     struct Planes(Vec<(u32, usize, f64, f64)>);
     impl SideField for Planes {
         fn region(&self, _: &Point3<f64>) -> u32 {

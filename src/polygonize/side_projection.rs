@@ -12,6 +12,10 @@
 //! - two or three regions (a crease node, a corner): the meeting point of their surfaces
 //!   nearest to the node, f_a = f_b (= f_c) = 0 ([`meet_point`], Gauss-Newton);
 //!
+//! With the regions' surfaces fitted to the data around each node given as well, a crease or
+//! corner node goes between those instead where they follow their points about as well as the
+//! implicit's sides, unless that folds a quad ([`project_onto_sides`]).
+//!
 //! A move longer than `max_move` (or a solve that fails) is not made: the node stays where the
 //! remesh put it. Nodes of an open boundary are left alone.
 
@@ -92,6 +96,17 @@ struct Target {
     sides: usize,
 }
 
+impl Target {
+    /// The position taken: the data's when `data` is set, else the implicit's.
+    fn chosen(&self, data: bool) -> Option<Point3<f64>> {
+        if data {
+            self.data
+        } else {
+            self.implicit
+        }
+    }
+}
+
 /// Rounds of undoing the data-fitted moves that fold quads ([`project_onto_sides`]).
 const UNFOLD_ROUNDS: usize = 4;
 
@@ -136,7 +151,7 @@ pub fn project_onto_sides(
             let sides: Vec<u32> = sides.into_iter().collect();
             let x = net.nodes[i];
             let near = |y: &Point3<f64>| (y - x).norm() <= max_move;
-            let data = if (2..=3).contains(&sides.len()) {
+            let fitted = if (2..=3).contains(&sides.len()) {
                 data.and_then(|d| d.near_checked(&x, &sides, field, scale))
                     .and_then(|local| meet_point(local.as_ref(), &sides, x, scale, &opts))
                     .filter(near)
@@ -151,44 +166,45 @@ pub fn project_onto_sides(
             .filter(near);
             Some(Target {
                 implicit,
-                data,
+                data: fitted,
                 sides: sides.len(),
             })
         })
         .collect();
     let start = net.nodes.clone();
-    let before = folded(net);
     let mut use_data: Vec<bool> = targets
         .iter()
         .map(|t| t.is_some_and(|t| t.data.is_some()))
         .collect();
+    // The folds before the projection, needed only when some node takes the data's position.
+    let before = use_data.contains(&true).then(|| folded(net));
     let place = |net: &mut QuadNet, use_data: &[bool]| {
         for (i, t) in targets.iter().enumerate() {
-            let y = t.and_then(|t| if use_data[i] { t.data } else { t.implicit });
-            net.nodes[i] = y.unwrap_or(start[i]);
+            net.nodes[i] = t.and_then(|t| t.chosen(use_data[i])).unwrap_or(start[i]);
         }
     };
     place(net, &use_data);
     let mut report = SideProjectionReport::default();
-    for _ in 0..UNFOLD_ROUNDS {
-        let after = folded(net);
-        let mut undone = 0;
-        for (q, quad) in net.quads.iter().enumerate() {
-            if after[q] && !before[q] {
-                for &i in quad {
-                    undone += usize::from(std::mem::take(&mut use_data[i as usize]));
+    if let Some(before) = before {
+        for _ in 0..UNFOLD_ROUNDS {
+            let after = folded(net);
+            let mut undone = 0;
+            for (q, quad) in net.quads.iter().enumerate() {
+                if after[q] && !before[q] {
+                    for &i in quad {
+                        undone += usize::from(std::mem::take(&mut use_data[i as usize]));
+                    }
                 }
             }
+            if undone == 0 {
+                break;
+            }
+            report.data_undone += undone;
+            place(net, &use_data);
         }
-        if undone == 0 {
-            break;
-        }
-        report.data_undone += undone;
-        place(net, &use_data);
     }
     for (i, t) in targets.iter().enumerate() {
-        let y = t.and_then(|t| if use_data[i] { t.data } else { t.implicit });
-        match (t, y) {
+        match (t, t.and_then(|t| t.chosen(use_data[i]))) {
             (Some(t), Some(y)) => {
                 report.max_move = report.max_move.max((y - start[i]).norm());
                 report.data_fitted += usize::from(use_data[i]);
