@@ -109,6 +109,10 @@ pub(super) enum Purpose {
     /// them (the hairpin's ear, which the collapse removes), and may leave a sliver along the
     /// straightened crease.
     Hairpin,
+    /// The clean-up of a crease's jog ([`super::cleanup`]): as for a sliver, and the new
+    /// edges may stray from the input by the collapsed edge's length more than the
+    /// tolerances allow (the input crease has the jog too: it is the step being removed).
+    Jog,
 }
 
 /// Whether `gone` may collapse onto `kept` (module doc) for `purpose`.
@@ -190,12 +194,17 @@ pub(super) fn may_collapse(
     // No new edge too curved for the tolerance: (kept, x) for every neighbour x of gone,
     // on the crease where it replaces a crease edge of gone, else inside its triangles' region.
     if rules.crease_tolerance.is_some() || rules.surface_tolerance.is_some() {
+        let allowance = if purpose == Purpose::Jog {
+            s.len(gone, kept)
+        } else {
+            0.0
+        };
         for &x in &ng {
             if x == kept || opposite.contains(&x) {
                 continue;
             }
             let on = s.edge_on(&topo.edges[&key(gone, x)]);
-            if rules.too_curved(s, kept, x, on) {
+            if rules.too_curved_by(s, kept, x, on, allowance) {
                 return false;
             }
         }

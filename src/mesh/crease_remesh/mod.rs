@@ -113,11 +113,18 @@ impl Rules<'_> {
 
     /// Whether edge (a, b) lying `on` is too coarse for the tolerance.
     fn too_curved(&self, s: &State, a: u32, b: u32, on: On) -> bool {
+        self.too_curved_by(s, a, b, on, 0.0)
+    }
+
+    /// [`Self::too_curved`] with the tolerance widened by `allowance`.
+    fn too_curved_by(&self, s: &State, a: u32, b: u32, on: On, allowance: f64) -> bool {
         let tolerance = match on {
             On::Crease(_) => self.crease_tolerance,
             On::Region(_) => self.surface_tolerance,
         };
-        tolerance.is_some_and(|t| s.len(a, b) > self.min && self.chord_error(s, a, b, on) > t)
+        tolerance.is_some_and(|t| {
+            s.len(a, b) > self.min && self.chord_error(s, a, b, on) > t + allowance
+        })
     }
 }
 
