@@ -392,7 +392,19 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
             creases.push(([a, b], crease_key(s.labels[fs[0] as usize], other)));
         }
     }
-    let pins = crease_turns(&s, &topo, creases.iter().map(|c| c.0), opts.clean_slivers);
+    // With the clean-up, a vertex by a corner is left to its jog rule.
+    let corner_gap = if opts.clean_slivers {
+        cleanup::JOG_LENGTH * opts.target
+    } else {
+        0.0
+    };
+    let pins = crease_turns(
+        &s,
+        &topo,
+        creases.iter().map(|c| c.0),
+        opts.clean_slivers,
+        corner_gap,
+    );
     for v in pins {
         s.pinned[v as usize] = true;
     }
@@ -490,12 +502,16 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
 /// two short edges by tens of degrees) only at the scale of its edges, and pinned it would stay
 /// for good, with its slivers. With `hairpins_free`, a turn by more than 180 degrees less
 /// [`cleanup::HAIRPIN_DEG`] (the crease coming back on itself: an extraction overshooting a
-/// corner) is not pinned either: the clean-up undoes it.
+/// corner) is not pinned either: the clean-up undoes it; nor is a vertex nearer than
+/// `corner_gap` to the corner its crease ends at (its turn there is the corner's, measured
+/// over a chord too short to tell: pinned, the short edge to the corner could never go, and
+/// the clean-up undoes its jog).
 fn crease_turns(
     s: &State,
     topo: &Topo,
     crease_edges: impl Iterator<Item = [u32; 2]>,
     hairpins_free: bool,
+    corner_gap: f64,
 ) -> Vec<u32> {
     let (mut sum, mut n) = (0.0, 0usize);
     for [a, b] in crease_edges {
@@ -507,7 +523,7 @@ fn crease_turns(
     }
     let scale = TURN_SCALE * sum / n as f64;
     // The point `scale` from v walking away from `prev` through `next` (or the last one).
-    let walk = |v: u32, first: u32| -> Point3<f64> {
+    let walk = |v: u32, first: u32| -> u32 {
         let p = s.pos[v as usize];
         let (mut prev, mut cur) = (v, first);
         for _ in 0..64 {
@@ -523,7 +539,7 @@ fn crease_turns(
             };
             (prev, cur) = (cur, next);
         }
-        s.pos[cur as usize]
+        cur
     };
     let cos_turn = PIN_TURN_DEG.to_radians().cos();
     let cos_hairpin = if hairpins_free {
@@ -538,9 +554,13 @@ fn crease_turns(
             }
             let c = topo.crease_neighbours(s, v);
             let p = s.pos[v as usize];
-            let (d0, d1) = (p - walk(v, c[0]), walk(v, c[1]) - p);
+            let ends = [walk(v, c[0]), walk(v, c[1])];
+            let by_corner = ends.iter().any(|&e| {
+                topo.kind[e as usize] == Kind::Corner && (s.pos[e as usize] - p).norm() < corner_gap
+            });
+            let (d0, d1) = (p - s.pos[ends[0] as usize], s.pos[ends[1] as usize] - p);
             let cos = d0.dot(&d1) / (d0.norm() * d1.norm());
-            cos < cos_turn && cos >= cos_hairpin
+            cos < cos_turn && cos >= cos_hairpin && !by_corner
         })
         .collect()
 }

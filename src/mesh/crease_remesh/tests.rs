@@ -465,3 +465,33 @@ fn folding_moves_are_undone() {
     // Vertex 4's triangles did not fold: its move stays.
     assert_eq!(s.pos[4], Point3::new(-1.1, 0.0, 0.0));
 }
+
+/// A crease vertex next to a corner, pushed into a face: its turn, measured over the short
+/// chord to the corner, pins it unless it lies within the corner gap (then the clean-up's jog
+/// rule takes it onto the corner instead of leaving a short edge that can never go).
+#[test]
+fn a_vertex_beside_a_corner_is_pinned_only_outside_the_gap() {
+    let n = 24;
+    let mut m = fine_cube(n);
+    let h = 1.0 / n as f64;
+    let v = m
+        .positions
+        .iter()
+        .position(|p| (p - Point3::new(h, 0.0, 0.0)).norm() < 1e-12)
+        .unwrap() as u32;
+    // Turned by atan(1/2) + atan(1/6), 36 degrees, over the chords to the corner and 3 h on.
+    m.positions[v as usize].y = 0.5 * h;
+    let s = State::new(&m);
+    let topo = s.topo();
+    let creases: Vec<[u32; 2]> = topo
+        .edges
+        .iter()
+        .filter(|(_, fs)| s.is_crease(fs))
+        .map(|(&(a, b), _)| [a, b])
+        .collect();
+    let pins = |gap: f64| crease_turns(&s, &topo, creases.iter().copied(), true, gap);
+    assert!(pins(0.0).contains(&v));
+    // 0.047 from the corner: left free by a gap of 0.05, pinned by one of 0.04.
+    assert!(!pins(0.05).contains(&v));
+    assert!(pins(0.04).contains(&v));
+}
