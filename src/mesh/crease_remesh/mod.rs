@@ -26,7 +26,8 @@
 //! the input's segmentation, and an edge between two regions (or on an open boundary) is a
 //! crease edge. A vertex with no crease edge is *smooth*, with two a *crease* vertex, and with
 //! one or three or more (or where three regions meet, or where the input's crease turns by more
-//! than [`PIN_TURN_DEG`] over a few edges) a *corner*, pinned. The operations keep this structure:
+//! than [`PIN_TURN_DEG`] over a few edges, unless the vertex lies within a quarter of L of a
+//! corner, with the clean-up on) a *corner*, pinned. The operations keep this structure:
 //! - splitting a crease edge gives a crease vertex (the triangles keep their labels);
 //! - a corner is never collapsed; a crease vertex only along one of its crease edges onto a
 //!   crease vertex or a corner (so the crease stays a path of edges, shortened along itself);
@@ -522,7 +523,8 @@ fn crease_turns(
         return Vec::new();
     }
     let scale = TURN_SCALE * sum / n as f64;
-    // The point `scale` from v walking away from `prev` through `next` (or the last one).
+    // The vertex `scale` from v walking away from it through `first` (or the last one: a
+    // corner, an open end, or v itself round a closed crease).
     let walk = |v: u32, first: u32| -> u32 {
         let p = s.pos[v as usize];
         let (mut prev, mut cur) = (v, first);
