@@ -96,7 +96,7 @@ fn clean_pass(s: &mut State, rules: &Rules) -> usize {
     };
     for x in 0..s.pos.len() as u32 {
         if topo.kind[x as usize] == Kind::Crease && !touched[x as usize] {
-            made(unpin_hairpin(s, &topo, rules, x), &mut touched);
+            made(undo_hairpin_or_jog(s, &topo, rules, x), &mut touched);
         }
     }
     for f in 0..s.tris.len() as u32 {
@@ -144,7 +144,7 @@ fn repair(s: &mut State, topo: &Topo, rules: &Rules, f: u32) -> Vec<u32> {
 /// extracted crease overshooting a corner and coming back, a region's triangle folded into
 /// the hairpin; or where it jogs (under [`JOG_DEG`] with an edge under [`JOG_LENGTH`] of its
 /// target). Returns the vertices whose one-ring changed.
-fn unpin_hairpin(s: &mut State, topo: &Topo, rules: &Rules, x: u32) -> Vec<u32> {
+fn undo_hairpin_or_jog(s: &mut State, topo: &Topo, rules: &Rules, x: u32) -> Vec<u32> {
     let ends = topo.crease_neighbours(s, x);
     let [u, w] = ends[..] else {
         return Vec::new();
@@ -197,7 +197,7 @@ fn flip_cap(s: &mut State, topo: &Topo, rules: &Rules, f: u32, x: u32, a: u32, b
 
 #[cfg(test)]
 mod tests {
-    use super::super::reference::{crease_key, Reference};
+    use super::super::reference::Reference;
     use super::super::LabelledMesh;
     use super::*;
     use nalgebra::Point3;
@@ -251,18 +251,7 @@ mod tests {
     /// Cleans `m` with the crease tolerance given; returns the state and the repairs made.
     fn clean_count(m: &LabelledMesh, crease_tolerance: Option<f64>) -> (State, usize) {
         let mut state = State::new(m);
-        // The input's crease edges: those between the floor's and the wall's triangles.
-        let mut sides: std::collections::HashMap<(u32, u32), Vec<u32>> = Default::default();
-        for (t, &l) in m.triangles.iter().zip(&m.labels) {
-            for k in 0..3 {
-                sides.entry(key(t[k], t[(k + 1) % 3])).or_default().push(l);
-            }
-        }
-        let creases: Vec<([u32; 2], (u32, u32))> = sides
-            .into_iter()
-            .filter(|(_, ls)| ls.len() == 2 && ls[0] != ls[1])
-            .map(|((a, b), ls)| ([a, b], crease_key(ls[0], ls[1])))
-            .collect();
+        let creases = super::super::crease_edges(&state, &state.topo());
         let reference = Reference::new(&m.positions, &m.triangles, &m.labels, &creases);
         let rules = Rules {
             target: 1.0,

@@ -382,17 +382,7 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
     let mut s = State::new(mesh);
     // The input's creases (projection targets) and its pinned turns.
     let topo = s.topo();
-    let mut creases = Vec::new();
-    for (&(a, b), fs) in &topo.edges {
-        if s.is_crease(fs) {
-            let other = if fs[1] == NONE {
-                OPEN
-            } else {
-                s.labels[fs[1] as usize]
-            };
-            creases.push(([a, b], crease_key(s.labels[fs[0] as usize], other)));
-        }
-    }
+    let creases = crease_edges(&s, &topo);
     // With the clean-up, a vertex by a corner is left to its jog rule.
     let corner_gap = if opts.clean_slivers {
         cleanup::JOG_LENGTH * opts.target
@@ -493,6 +483,23 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
         }
     }
     Ok(compact(&s))
+}
+
+/// The crease edges of `s` with the two regions each separates ([`crease_key`]; [`OPEN`] for
+/// the missing side of a boundary edge).
+fn crease_edges(s: &State, topo: &Topo) -> Vec<([u32; 2], (u32, u32))> {
+    topo.edges
+        .iter()
+        .filter(|(_, fs)| s.is_crease(fs))
+        .map(|(&(a, b), fs)| {
+            let other = if fs[1] == NONE {
+                OPEN
+            } else {
+                s.labels[fs[1] as usize]
+            };
+            ([a, b], crease_key(s.labels[fs[0] as usize], other))
+        })
+        .collect()
 }
 
 /// The input's crease vertices where their crease turns by more than [`PIN_TURN_DEG`], on the

@@ -483,13 +483,8 @@ fn a_vertex_beside_a_corner_is_pinned_only_outside_the_gap() {
     m.positions[v as usize].y = 0.5 * h;
     let s = State::new(&m);
     let topo = s.topo();
-    let creases: Vec<[u32; 2]> = topo
-        .edges
-        .iter()
-        .filter(|(_, fs)| s.is_crease(fs))
-        .map(|(&(a, b), _)| [a, b])
-        .collect();
-    let pins = |gap: f64| crease_turns(&s, &topo, creases.iter().copied(), true, gap);
+    let creases = crease_edges(&s, &topo);
+    let pins = |gap: f64| crease_turns(&s, &topo, creases.iter().map(|c| c.0), true, gap);
     assert!(pins(0.0).contains(&v));
     // 0.047 from the corner: left free by a gap of 0.05, pinned by one of 0.04.
     assert!(!pins(0.05).contains(&v));
