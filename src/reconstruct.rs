@@ -15,7 +15,9 @@ use crate::mesh::{Mesh, Topology};
 use crate::metrics::{deviation, Deviation};
 use crate::normals::{oriented_points, NormalSource};
 use crate::polygonize::components::keep_supported_components;
+use crate::polygonize::crease_mesh::crease_mesh;
 use crate::polygonize::crease_split::{split_at_creases, CreaseSplitOptions, CreaseSplitReport};
+use crate::polygonize::remesh_net::RemeshNetReport;
 use crate::polygonize::{marching_cubes, refine, relax, RefineOptions, RefineReport};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -51,6 +53,11 @@ pub struct ReconstructOptions {
     /// machined ([`crate::features::sharp_choice`]), `Off` never. With a single region (an
     /// organic model) the result is the same in every mode.
     pub sharp: SharpMode,
+    /// With the sharp edges kept: remesh the result into a light mesh with its edges on the
+    /// creases and its vertices on the regions' surfaces ([`crate::polygonize::crease_mesh`];
+    /// no subdivision before it). Default false; ignored (`remesh` None in the report) when
+    /// the sharp edges are not kept.
+    pub remesh: bool,
 }
 
 impl Default for ReconstructOptions {
@@ -66,6 +73,7 @@ impl Default for ReconstructOptions {
             normal_neighbours: crate::normals::DEFAULT_NEIGHBOURS,
             measure_deviation: true,
             sharp: SharpMode::Auto,
+            remesh: false,
         }
     }
 }
@@ -82,6 +90,8 @@ pub struct Timings {
     pub refine: f64,
     /// The split of the mesh on the creases (`sharp`).
     pub creases: f64,
+    /// The crease-aligned remesh (`remesh`).
+    pub remesh: f64,
     pub deviation: f64,
     pub total: f64,
 }
@@ -121,6 +131,8 @@ pub struct ReconstructReport {
     pub features: Option<crate::features::SegmentStats>,
     /// The mesh's edges split at the creases (`sharp`).
     pub creases: Option<CreaseSplitReport>,
+    /// The crease-aligned remesh (`remesh` with the sharp edges kept).
+    pub remesh: Option<RemeshNetReport>,
     pub timings: Timings,
 }
 
@@ -191,6 +203,12 @@ pub fn reconstruct(
     };
     timings.fit = t.elapsed().as_secs_f64();
     let side_field = segmentation.as_ref().map(|seg| SharpField { seg, f: &f });
+    let remesh = opts.remesh && side_field.is_some();
+    // The remesh starts from the marching-cubes mesh: subdividing it first buys nothing.
+    let mesh_opts = ReconstructOptions {
+        max_subdivisions: if remesh { 0 } else { opts.max_subdivisions },
+        ..opts.clone()
+    };
     let SurfaceMesh {
         mesh,
         cell,
@@ -205,11 +223,21 @@ pub fn reconstruct(
         &f,
         &op.points[..op.original],
         side_field.as_ref(),
-        opts,
+        &mesh_opts,
         &mut timings,
         progress,
     )?;
     let diag = f.diagonal();
+    let (mesh, remesh_report) = match side_field.as_ref().filter(|_| remesh) {
+        Some(field) => {
+            progress("remesh", 0.8);
+            let t = Instant::now();
+            let (m, r) = crease_mesh(&mesh, &f, field)?;
+            timings.remesh = t.elapsed().as_secs_f64();
+            (m, Some(r))
+        }
+        None => (mesh, None),
+    };
 
     progress("deviation", 0.9);
     let t = Instant::now();
@@ -248,6 +276,7 @@ pub fn reconstruct(
         sharp,
         features: segmentation.map(|s| s.stats),
         creases,
+        remesh: remesh_report,
         timings,
     };
     Ok((mesh, report))

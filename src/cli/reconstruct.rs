@@ -39,6 +39,11 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = SharpMode::Auto, num_args = 0..=1,
           default_missing_value = "on", value_name = "on|off|auto")]
     pub sharp: SharpMode,
+    /// With the sharp edges kept: remesh the result into a light mesh (tens of thousands of
+    /// triangles instead of a million) whose edges run on the creases and whose vertices lie
+    /// on the faces' surfaces, finer where a face or a crease curves. Off by default.
+    #[arg(long)]
+    pub remesh: bool,
 }
 
 pub fn run(a: Args, quiet: bool) -> Result<()> {
@@ -57,6 +62,7 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         resolution: a.resolution,
         tolerance: a.tolerance,
         sharp: a.sharp,
+        remesh: a.remesh,
         ..ReconstructOptions::default()
     };
     opts.fit.tolerance = a.fit_tolerance;
@@ -101,6 +107,9 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
         if let Some(c) = report.sharp.as_ref().filter(|c| c.regions > 1) {
             let kept = if c.sharp { "kept" } else { "rounded" };
             eprintln!("sharp edges {kept}: {}", c.reason);
+        }
+        if a.remesh && report.remesh.is_none() {
+            eprintln!("--remesh: no sharp edges kept, so the mesh was not remeshed");
         }
     }
     Ok(())

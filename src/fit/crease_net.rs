@@ -8,16 +8,17 @@
 //! mesh becomes a quad net with its edges on the creases ([`crate::polygonize::remesh_net`]),
 //! its crease and corner nodes between the regions' surfaces fitted to the data around them
 //! where those follow their points ([`crate::features::data_sides`], within
-//! [`DATA_SIDES_RADIUS`] target edges). The voxel route puts the voxel net's nodes on
-//! the creases ([`crate::polygonize::crease_nodes`]); it cannot follow a crease at an angle to
-//! its grid (docs/BENCHMARKS.md: crease max about 1e-2 of the diagonal against 2e-4 to 1e-3).
+//! [`crate::polygonize::crease_mesh::DATA_SIDES_RADIUS`] target edges). The voxel route puts
+//! the voxel net's nodes on the creases ([`crate::polygonize::crease_nodes`]); it cannot follow
+//! a crease at an angle to its grid (docs/BENCHMARKS.md: crease max about 1e-2 of the diagonal against 2e-4 to 1e-3).
 
 use crate::features::sharp_field::SharpField;
 use crate::implicit::PouImplicit;
 use crate::mesh::retain::retain_faces;
 use crate::mesh::Mesh;
+use crate::polygonize::crease_mesh::data_sides;
 use crate::polygonize::quad_net::QuadNet;
-use crate::polygonize::remesh_net::{remesh_net, target_edge, RemeshNet, RemeshNetOptions};
+use crate::polygonize::remesh_net::{remesh_net, RemeshNet, RemeshNetOptions};
 use crate::reconstruct::{surface_mesh, ReconstructOptions, Timings};
 use crate::spatial::KdTree;
 use crate::Result;
@@ -28,10 +29,6 @@ use nalgebra::Point3;
 /// (make_parts' block.stl: crease max 4.5e-4 of the diagonal either way) at ten times the time
 /// (12 s against 1.1 s) and twice the memory.
 const SURFACE_SUBDIVISIONS: usize = 0;
-
-/// Radius, in target edges of the remesh, of the data fitted around a crease or corner node
-/// for the surfaces it is put between ([`crate::features::data_sides`]).
-const DATA_SIDES_RADIUS: f64 = 1.5;
 
 /// How `fit --sharp` builds its crease-aligned net (`--crease-net`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, clap::ValueEnum)]
@@ -105,10 +102,7 @@ pub fn remeshed(inputs: &RemeshInputs) -> Result<RemeshNet> {
         mesh = supported(&mesh, inputs.tree, r);
     }
     let diag = inputs.f.diagonal();
-    let data = crate::features::data_sides::DataSides {
-        seg: inputs.field.seg,
-        radius: DATA_SIDES_RADIUS * target_edge(&mesh, inputs.quads),
-    };
+    let data = data_sides(inputs.field, &mesh, inputs.quads);
     remesh_net(
         &mesh,
         inputs.f,

@@ -14,6 +14,7 @@ pub mod corner_snap;
 pub mod crease_collapse;
 pub mod crease_flip;
 pub mod crease_labels;
+pub mod crease_mesh;
 pub mod crease_nodes;
 pub mod crease_snap;
 pub mod crease_split;

@@ -603,13 +603,17 @@ fn check_manifold(mesh: &LabelledMesh) -> Result<()> {
 /// Splits edges longer than 4/3 L, or too curved for the tolerance, at their midpoints,
 /// longest first, one per triangle per pass.
 fn split_long(s: &mut State, rules: &Rules) -> usize {
+    use rayon::prelude::*;
     let topo = s.topo();
-    let mut long: Vec<((u32, u32), f64)> = topo
-        .edges
-        .iter()
-        .map(|(&(a, b), fs)| ((a, b), s.len(a, b), fs))
+    // In parallel: with a surface tolerance every edge's chord error is a query of the input.
+    let edges: Vec<(&(u32, u32), &[u32; 2])> = topo.edges.iter().collect();
+    let state: &State = s;
+    let mut long: Vec<((u32, u32), f64)> = edges
+        .into_par_iter()
+        .map(|(&(a, b), fs)| ((a, b), state.len(a, b), fs))
         .filter(|&((a, b), l, fs)| {
-            l > 4.0 / 3.0 * rules.edge_target(s, a, b) || rules.too_curved(s, a, b, s.edge_on(fs))
+            l > 4.0 / 3.0 * rules.edge_target(state, a, b)
+                || rules.too_curved(state, a, b, state.edge_on(fs))
         })
         .map(|(e, l, _)| (e, l))
         .collect();
