@@ -14,9 +14,10 @@
 //! stay mesh edges.
 //!
 //! The sizes: a flat-shaded triangle of edge s on a cylinder of radius R is off the surface by
-//! the sagitta s^2 / (8 R) and its normal by up to s / (2 R); the surface tolerance t makes
-//! s about sqrt(8 R t), so the normal error stays near sqrt(2 t / R): 0.8 degrees on a 10 mm
-//! hole of a 76 mm part at t = 1e-4 of the diagonal.
+//! the sagitta s^2 / (8 R) and its normal by up to s / (2 R) at its edges; the surface
+//! tolerance t makes s about sqrt(8 R t), so the normal error stays under sqrt(2 t / R): 3
+//! degrees on a 10 mm hole of a 76 mm part at t = 1e-4 of the diagonal, less inside the
+//! triangles (make_parts' parts: 95 % of the faces' samples within 1.7 degrees).
 
 use super::quad_net::QuadNet;
 use super::remesh_net::{remesh_net, target_edge, RemeshNetOptions, RemeshNetReport};
