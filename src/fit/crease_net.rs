@@ -8,17 +8,17 @@
 //! mesh becomes a quad net with its edges on the creases ([`crate::polygonize::remesh_net`]),
 //! its crease and corner nodes between the regions' surfaces fitted to the data around them
 //! where those follow their points ([`crate::features::data_sides`], within
-//! [`crate::polygonize::crease_mesh::DATA_SIDES_RADIUS`] target edges). The voxel route puts
+//! [`crate::polygonize::remesh_net::DATA_SIDES_RADIUS`] target edges). The voxel route puts
 //! the voxel net's nodes on the creases ([`crate::polygonize::crease_nodes`]); it cannot follow
-//! a crease at an angle to its grid (docs/BENCHMARKS.md: crease max about 1e-2 of the diagonal against 2e-4 to 1e-3).
+//! a crease at an angle to its grid (docs/BENCHMARKS.md: crease max about 1e-2 of the
+//! diagonal against 2e-4 to 1e-3).
 
 use crate::features::sharp_field::SharpField;
 use crate::implicit::PouImplicit;
 use crate::mesh::retain::retain_faces;
 use crate::mesh::Mesh;
-use crate::polygonize::crease_mesh::data_sides;
 use crate::polygonize::quad_net::QuadNet;
-use crate::polygonize::remesh_net::{remesh_net, RemeshNet, RemeshNetOptions};
+use crate::polygonize::remesh_net::{data_sides, remesh_net, RemeshNet, RemeshNetOptions};
 use crate::reconstruct::{surface_mesh, ReconstructOptions, Timings};
 use crate::spatial::KdTree;
 use crate::Result;

@@ -20,9 +20,8 @@
 //! triangles (make_parts' parts: 95 % of the faces' samples within 1.7 degrees).
 
 use super::quad_net::QuadNet;
-use super::remesh_net::{remesh_net, target_edge, RemeshNetOptions, RemeshNetReport};
+use super::remesh_net::{data_sides, remesh_net, RemeshNetOptions, RemeshNetReport};
 use crate::error::Result;
-use crate::features::data_sides::DataSides;
 use crate::features::sharp_field::SharpField;
 use crate::implicit::PouImplicit;
 use crate::mesh::Mesh;
@@ -35,18 +34,6 @@ pub const QUADS: usize = 5000;
 
 /// Largest chord error of an edge inside a region, fraction of the diagonal (module doc).
 pub const SURFACE_TOLERANCE: f64 = 1e-4;
-
-/// Radius, in target edges of the remesh, of the data fitted around a crease or corner node
-/// for the surfaces it is put between ([`crate::features::data_sides`]).
-pub const DATA_SIDES_RADIUS: f64 = 1.5;
-
-/// The data's local surfaces around the nodes of a net of `quads` quads on `mesh`.
-pub fn data_sides<'a>(field: &SharpField<'a>, mesh: &Mesh, quads: usize) -> DataSides<'a> {
-    DataSides {
-        seg: field.seg,
-        radius: DATA_SIDES_RADIUS * target_edge(mesh, quads),
-    }
-}
 
 /// The crease-aligned triangle mesh of `mesh`, a mesh of the sharp implicit `f` with sides
 /// `field` (module doc), and what the remesh did.

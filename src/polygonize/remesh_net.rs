@@ -33,7 +33,9 @@ use super::quad_net::QuadNet;
 use super::quad_split::{split_into_quads, NodeKind};
 use super::side_projection::{project_onto_sides, region_map, SideProjectionReport, Sides};
 use crate::error::Result;
+use crate::features::data_sides::DataSides;
 use crate::features::segment_mesh::segment_mesh_hinted;
+use crate::features::sharp_field::SharpField;
 use crate::implicit::Implicit;
 use crate::mesh::crease_remesh::{remesh, LabelledMesh, RemeshOptions};
 use crate::mesh::unfold::{unfold, UnfoldReport};
@@ -109,6 +111,18 @@ pub fn target_edge(mesh: &Mesh, quads: usize) -> f64 {
     let area: f64 = (0..mesh.faces.len()).map(|f| mesh.face_area(f)).sum();
     let per_triangle = 3f64.sqrt() / 4.0;
     (3.0 * area / (per_triangle * quads.max(1) as f64)).sqrt()
+}
+
+/// Radius, in target edges of the remesh, of the data fitted around a crease or corner node
+/// for the surfaces it is put between ([`crate::features::data_sides`]).
+pub const DATA_SIDES_RADIUS: f64 = 1.5;
+
+/// The data's local surfaces around the nodes of a net of `quads` quads on `mesh`.
+pub fn data_sides<'a>(field: &SharpField<'a>, mesh: &Mesh, quads: usize) -> DataSides<'a> {
+    DataSides {
+        seg: field.seg,
+        radius: DATA_SIDES_RADIUS * target_edge(mesh, quads),
+    }
 }
 
 /// The crease-aligned net and its labels.

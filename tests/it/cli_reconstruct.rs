@@ -5,10 +5,6 @@ use crate::common::{self, json_f64 as f};
 use std::path::Path;
 use std::process::Command;
 
-/// `reconstruct --sharp` keeps the block's creases, from its mesh and from its noisy cloud: the
-/// mesh's triangles split on the creases (1.6e-4 and 3.5e-4 of the diagonal at the 95th
-/// percentile; without `--sharp` 1.2e-3 and 1.6e-3), the band beside them and the faces turned
-/// right (0.9 and 2.3 degrees; without: band 14 degrees at the 95th percentile), nothing folded.
 /// `reconstruct` of make_parts' `input` into `dir` with `extra` options: the mesh written and
 /// the report.
 fn reconstruct_part(
@@ -36,6 +32,10 @@ fn reconstruct_part(
     (out, r)
 }
 
+/// `reconstruct --sharp` keeps the block's creases, from its mesh and from its noisy cloud: the
+/// mesh's triangles split on the creases (1.6e-4 and 3.5e-4 of the diagonal at the 95th
+/// percentile; without `--sharp` 1.2e-3 and 1.6e-3), the band beside them and the faces turned
+/// right (0.9 and 2.3 degrees; without: band 14 degrees at the 95th percentile), nothing folded.
 #[test]
 fn sharp_keeps_the_block_creases() {
     let Some(parts) = common::make_parts() else {
