@@ -11,6 +11,7 @@ use crate::features::sharp_field::SharpField;
 use crate::features::{SharpChoice, SharpMode};
 use crate::implicit::project::ProjectOptions;
 use crate::implicit::{FitOptions, FitStats, PouImplicit};
+use crate::mesh::shape::{triangle_shape, TriangleShape};
 use crate::mesh::{Mesh, Topology};
 use crate::metrics::{deviation, Deviation};
 use crate::normals::{oriented_points, NormalSource};
@@ -121,6 +122,9 @@ pub struct ReconstructReport {
     pub vertices: usize,
     pub faces: usize,
     pub closed_manifold: bool,
+    /// The output triangles' angles: smallest, slivers and degenerate ones
+    /// ([`crate::mesh::shape`]).
+    pub triangles: TriangleShape,
     pub euler_characteristic: i64,
     pub components: usize,
     pub deviation: Option<Deviation>,
@@ -269,6 +273,7 @@ pub fn reconstruct(
         vertices: mesh.positions.len(),
         faces: mesh.faces.len(),
         closed_manifold: topo.is_closed_manifold(),
+        triangles: triangle_shape(&mesh),
         euler_characteristic: mesh.positions.len() as i64 - topo.edges.len() as i64
             + mesh.faces.len() as i64,
         components: topo.components.len(),

@@ -108,6 +108,14 @@ pub fn run(a: Args, quiet: bool) -> Result<()> {
             let kept = if c.sharp { "kept" } else { "rounded" };
             eprintln!("sharp edges {kept}: {}", c.reason);
         }
+        if report.triangles.degenerate > 0 {
+            eprintln!(
+                "warning: {} degenerate triangles (smallest angle under {} degrees) in {}",
+                report.triangles.degenerate,
+                crate::mesh::shape::DEGENERATE_ANGLE_DEG,
+                a.output.display()
+            );
+        }
         if a.remesh && report.remesh.is_none() {
             eprintln!("--remesh: no sharp edges kept, so the mesh was not remeshed");
         }

@@ -9,6 +9,7 @@ pub mod crease_remesh;
 pub mod normals;
 pub mod retain;
 pub mod sample;
+pub mod shape;
 pub mod subdivide;
 pub mod subsample;
 pub mod topology;

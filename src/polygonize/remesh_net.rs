@@ -58,9 +58,10 @@ pub struct RemeshNetOptions {
     /// Growth of the target length per unit length away from a finely split crease (default
     /// 0.5; [`crate::mesh::crease_remesh::sizing`]).
     pub grade: f64,
-    /// Largest chord error of an edge inside a region against the mesh, as a fraction of the
-    /// diagonal: curved faces get shorter edges (`None`, the default for `fit`: the target
-    /// length alone; [`crate::mesh::crease_remesh::RemeshOptions::surface_tolerance`]).
+    /// Largest chord error of an edge inside a region, as a fraction of the diagonal, through
+    /// the sizing field of the mesh's curvature: curved faces get shorter edges (`None`, the
+    /// default for `fit`: the target length alone;
+    /// [`crate::mesh::crease_remesh::RemeshOptions::surface_sizing`]).
     pub surface_tolerance: Option<f64>,
 }
 
@@ -164,7 +165,7 @@ pub fn remesh_net<I: Implicit + ?Sized>(
     ro.iterations = opts.iterations;
     ro.crease_tolerance = Some(opts.crease_tolerance * diagonal);
     ro.grade = Some(opts.grade);
-    ro.surface_tolerance = opts.surface_tolerance.map(|t| t * diagonal);
+    ro.surface_sizing = opts.surface_tolerance.map(|t| t * diagonal);
     ro.delaunay = true;
     ro.clean_slivers = true;
     let mut labelled = LabelledMesh {

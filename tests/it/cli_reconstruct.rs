@@ -80,9 +80,9 @@ fn sharp_keeps_the_block_creases() {
 /// `reconstruct --remesh` turns the block's sharp mesh into a light one (under 150,000
 /// triangles against half a million) whose edges run on the creases, within issue 35's bars
 /// for the crease (max 5e-4 of the diagonal), the band beside it (3 degrees) and the faces
-/// (2.5) (measured: 4.4e-4, 1.0 and 0.9 degrees, 67,000 triangles). From the mesh only: the
-/// noisy cloud takes 109 s (its figures are in docs/BENCHMARKS.md; its crease max, 5.0e-4,
-/// sits at the bar).
+/// (2.5) (measured: 4.7e-4, 1.1 and 1.4 degrees, 59,000 triangles, none degenerate). From the
+/// mesh only: the noisy cloud takes 36 s and its crease max, 5.8e-4, is over the bar (its
+/// figures are in docs/BENCHMARKS.md).
 #[test]
 fn remesh_gives_a_light_mesh_with_edges_on_the_creases() {
     let Some(parts) = common::make_parts() else {
@@ -102,6 +102,12 @@ fn remesh_gives_a_light_mesh_with_edges_on_the_creases() {
         r["remesh"]
     );
     assert!(f(&r, &["timings", "remesh"]) > 0.0, "{input}");
+    assert_eq!(
+        f(&r, &["triangles", "degenerate"]),
+        0.0,
+        "{input}: {}",
+        r["triangles"]
+    );
     let c = common::tool_json("part_check.py", &[&out, &truth]);
     let crease = f(&c, &["crease", "distance_max"]);
     let band = f(&c, &["crease", "band_normal_err_deg", "p95"]);

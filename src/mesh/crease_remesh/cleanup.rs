@@ -258,7 +258,6 @@ mod tests {
             sizing: None,
             min: 1.0 / 16.0,
             crease_tolerance,
-            surface_tolerance: None,
             reference: &reference,
         };
         let count = clean_slivers(&mut state, &rules);

@@ -193,7 +193,7 @@ pub(super) fn may_collapse(
     }
     // No new edge too curved for the tolerance: (kept, x) for every neighbour x of gone,
     // on the crease where it replaces a crease edge of gone, else inside its triangles' region.
-    if rules.crease_tolerance.is_some() || rules.surface_tolerance.is_some() {
+    if rules.crease_tolerance.is_some() {
         let allowance = if purpose == Purpose::Jog {
             s.len(gone, kept)
         } else {
