@@ -16,9 +16,8 @@ use crate::mesh::{Mesh, Topology};
 use crate::metrics::{deviation, Deviation};
 use crate::normals::{oriented_points, NormalSource};
 use crate::polygonize::components::keep_supported_components;
-use crate::polygonize::crease_mesh::crease_mesh;
+use crate::polygonize::crease_mesh::{crease_mesh, CreaseMeshReport};
 use crate::polygonize::crease_split::{split_at_creases, CreaseSplitOptions, CreaseSplitReport};
-use crate::polygonize::remesh_net::RemeshNetReport;
 use crate::polygonize::{marching_cubes, refine, relax, RefineOptions, RefineReport};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -136,7 +135,7 @@ pub struct ReconstructReport {
     /// The mesh's edges split at the creases (`sharp`).
     pub creases: Option<CreaseSplitReport>,
     /// The crease-aligned remesh (`remesh` with the sharp edges kept).
-    pub remesh: Option<RemeshNetReport>,
+    pub remesh: Option<CreaseMeshReport>,
     pub timings: Timings,
 }
 

@@ -31,7 +31,11 @@
 //! tolerance) except the 4/3 L bound on the edges they lengthen.
 
 use super::collapse::{collapse_first, less_constrained_first, nearer_first, Purpose};
+use super::flips::{flip_edges, Flip};
+use super::reference::Reference;
+use super::{compact, crease_edges, crease_turns, validate, LabelledMesh, MIN_FRACTION};
 use super::{key, Kind, On, Rules, State, Topo, NONE};
+use crate::error::Result;
 use nalgebra::Vector3;
 
 /// A triangle with an angle under this (or over 180 less this) is a sliver, degrees.
@@ -79,6 +83,43 @@ pub(super) fn clean_slivers(s: &mut State, rules: &Rules) -> usize {
         }
     }
     total
+}
+
+/// Removes the slivers of a mesh that was not remeshed here (module doc), e.g. a remeshed one
+/// whose vertices were moved afterwards: `target` is its edge length (the collapses' shortest
+/// edge, L / [`super::MIN_FRACTION`], hangs on it), `crease_tolerance` the largest chord error
+/// a collapse may leave on a crease (against `mesh` itself). Returns the cleaned mesh and the
+/// repairs made.
+pub fn clean(
+    mesh: &LabelledMesh,
+    target: f64,
+    crease_tolerance: Option<f64>,
+) -> Result<(LabelledMesh, usize)> {
+    validate(mesh, target)?;
+    let mut s = State::new(mesh);
+    let topo = s.topo();
+    let creases = crease_edges(&s, &topo);
+    let edges = creases.iter().map(|c| c.0);
+    for v in crease_turns(&s, &topo, edges, true, JOG_LENGTH * target) {
+        s.pinned[v as usize] = true;
+    }
+    let reference = Reference::new(&mesh.positions, &mesh.triangles, &mesh.labels, &creases);
+    let rules = Rules {
+        target,
+        sizing: None,
+        min: target / MIN_FRACTION,
+        crease_tolerance,
+        reference: &reference,
+    };
+    let mut total = 0;
+    for _ in 0..4 {
+        let n = clean_slivers(&mut s, &rules) + flip_edges(&mut s, &rules, Flip::Ear);
+        total += n;
+        if n == 0 {
+            break;
+        }
+    }
+    Ok((compact(&s), total))
 }
 
 /// One pass: every hairpin, then every sliver, whose vertices no earlier repair of the pass

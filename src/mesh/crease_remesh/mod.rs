@@ -46,6 +46,7 @@
 //! (p95) and its creases 1.5 % of the diagonal away.
 
 mod cleanup;
+pub use cleanup::clean;
 mod collapse;
 mod flips;
 use collapse::collapse_short;
@@ -357,9 +358,9 @@ impl Topo {
     }
 }
 
-/// Remeshes `mesh` to edges of about `opts.target`, keeping its creases and corners (see the
-/// module doc). The input should be finer than the target (it is the projection target).
-pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh> {
+/// Checks that `mesh` can be remeshed at edge length `target`: a label per triangle, a
+/// positive target, vertex indices in range, an edge-manifold mesh.
+fn validate(mesh: &LabelledMesh, target: f64) -> Result<()> {
     if mesh.labels.len() != mesh.triangles.len() {
         return Err(Error::Degenerate(format!(
             "remesh: {} labels for {} triangles",
@@ -367,10 +368,10 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
             mesh.triangles.len()
         )));
     }
-    if !(opts.target.is_finite() && opts.target > 0.0) {
+    if !(target.is_finite() && target > 0.0) {
         return Err(Error::InvalidOption(format!(
             "remesh: target edge length {} (positive expected)",
-            opts.target
+            target
         )));
     }
     if let Some(t) = mesh
@@ -384,7 +385,13 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
             mesh.positions.len()
         )));
     }
-    check_manifold(mesh)?;
+    check_manifold(mesh)
+}
+
+/// Remeshes `mesh` to edges of about `opts.target`, keeping its creases and corners (see the
+/// module doc). The input should be finer than the target (it is the projection target).
+pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh> {
+    validate(mesh, opts.target)?;
     let mut s = State::new(mesh);
     // The input's creases (projection targets) and its pinned turns.
     let topo = s.topo();

@@ -490,3 +490,51 @@ fn a_vertex_beside_a_corner_is_pinned_only_outside_the_gap() {
     assert!(!pins(0.05).contains(&v));
     assert!(pins(0.04).contains(&v));
 }
+
+/// A crease vertex moved onto its crease neighbour (as putting nodes onto a crease can do)
+/// leaves two triangles with a zero-length edge; [`clean`] collapses it away: no degenerate
+/// triangle is left, the mesh stays closed and edge-manifold, the crease keeps its edges.
+#[test]
+fn clean_removes_a_zero_length_crease_edge() {
+    let n = 8;
+    let mut m = fine_cube(n);
+    let at = |m: &LabelledMesh, p: Point3<f64>| {
+        m.positions
+            .iter()
+            .position(|q| (q - p).norm() < 1e-12)
+            .unwrap() as u32
+    };
+    let a = at(&m, Point3::new(1.0 / 8.0, 0.0, 0.0));
+    let b = at(&m, Point3::new(2.0 / 8.0, 0.0, 0.0));
+    m.positions[a as usize] = m.positions[b as usize];
+    let degenerate = |m: &LabelledMesh| {
+        m.triangles
+            .iter()
+            .filter(|t| {
+                let [p, q, r] = t.map(|v| m.positions[v as usize]);
+                crate::mesh::shape::min_angle_deg(&p, &q, &r) < 0.1
+            })
+            .count()
+    };
+    assert_eq!(degenerate(&m), 2);
+    let (out, repairs) = clean(&m, 1.0 / n as f64, Some(1e-3)).unwrap();
+    assert!(repairs >= 1);
+    assert_eq!(degenerate(&out), 0);
+    assert_eq!(out.positions.len(), m.positions.len() - 1);
+    let e = edges(&out);
+    assert!(
+        e.values().all(|fs| fs.len() == 2),
+        "not closed and edge-manifold"
+    );
+    let on_x_edge = e
+        .iter()
+        .filter(|(_, fs)| out.labels[fs[0] as usize] != out.labels[fs[1] as usize])
+        .filter(|(&(p, q), _)| {
+            [p, q].iter().all(|&v| {
+                let x = out.positions[v as usize];
+                x.y.abs() < 1e-12 && x.z.abs() < 1e-12
+            })
+        })
+        .count();
+    assert_eq!(on_x_edge, n - 1);
+}
