@@ -8,7 +8,7 @@
 //! ([`super::remesh_net`]: segmentation, a crease-preserving isotropic remesh at the length L
 //! of [`QUADS`] quads, graded finer along curved creases and, inside a region, finer where
 //! the mesh's curvature would put a chord more than [`SURFACE_TOLERANCE`] of the diagonal
-//! off it ([`crate::mesh::crease_remesh::sizing::surface_samples`]), every triangle split into
+//! off it ([`crate::mesh::crease_remesh::sizing`]), every triangle split into
 //! three quads, every node put onto its region's side, crease and
 //! corner nodes onto the meeting of the sides fitted to the data around them), and each quad
 //! is cut along its shorter diagonal into two triangles. Crease edges are quad edges, so they

@@ -111,15 +111,22 @@ pub fn clean(
         crease_tolerance,
         reference: &reference,
     };
+    let total = clean_and_flip(&mut s, &rules);
+    Ok((compact(&s), total))
+}
+
+/// The remesh's last step and [`clean`]'s: slivers removed and ears flipped, in turn, until
+/// a round changes nothing (at most four). Returns the repairs and flips made.
+pub(super) fn clean_and_flip(s: &mut State, rules: &Rules) -> usize {
     let mut total = 0;
     for _ in 0..4 {
-        let n = clean_slivers(&mut s, &rules) + flip_edges(&mut s, &rules, Flip::Ear);
+        let n = clean_slivers(s, rules) + flip_edges(s, rules, Flip::Ear);
         total += n;
         if n == 0 {
             break;
         }
     }
-    Ok((compact(&s), total))
+    total
 }
 
 /// One pass: every hairpin, then every sliver, whose vertices no earlier repair of the pass

@@ -151,7 +151,7 @@ pub struct RemeshOptions {
     /// lengths alone.
     pub crease_tolerance: Option<f64>,
     /// Largest chord error inside a region, as a sizing field from the input's curvature
-    /// computed once ([`sizing::surface_samples`]); curved faces get shorter edges. Needs
+    /// computed once (the [`sizing`] module doc); curved faces get shorter edges. Needs
     /// `grade`. `None` (default): L inside the regions.
     ///
     /// (A test of every region edge's chord against the input triangles, as the crease edges
@@ -437,6 +437,7 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
             &mesh.positions,
             &mesh.triangles,
             &mesh.labels,
+            &topo.edges,
             opts.target,
             t,
             1.0 / MIN_FRACTION,
@@ -499,11 +500,7 @@ pub fn remesh(mesh: &LabelledMesh, opts: &RemeshOptions) -> Result<LabelledMesh>
         }
     }
     if opts.clean_slivers {
-        for _ in 0..4 {
-            if cleanup::clean_slivers(&mut s, &rules) + flip_edges(&mut s, &rules, Flip::Ear) == 0 {
-                break;
-            }
-        }
+        cleanup::clean_and_flip(&mut s, &rules);
     }
     Ok(compact(&s))
 }
@@ -628,7 +625,7 @@ fn check_manifold(mesh: &LabelledMesh) -> Result<()> {
 fn split_long(s: &mut State, rules: &Rules) -> usize {
     use rayon::prelude::*;
     let topo = s.topo();
-    // In parallel: with a surface tolerance every edge's chord error is a query of the input.
+    // In parallel: every crease edge's chord error is a query of the input.
     let edges: Vec<(&(u32, u32), &[u32; 2])> = topo.edges.iter().collect();
     let state: &State = s;
     let mut long: Vec<((u32, u32), f64)> = edges

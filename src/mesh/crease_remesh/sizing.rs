@@ -132,12 +132,14 @@ impl Sizing {
 }
 
 /// The samples of the surface's curvature inside the regions (module doc): every vertex of
-/// `triangles` (labelled `labels`) whose size sqrt(8 t / k) under `tolerance` t is below
-/// `target` (clamped to `min_fraction` of it).
-pub fn surface_samples(
+/// `triangles` (labelled `labels`, their undirected edges -> their one or two triangles in
+/// `edges`, the remesh's topology of the input) whose size sqrt(8 t / k) under `tolerance` t
+/// is below `target` (clamped to `min_fraction` of it).
+pub(super) fn surface_samples(
     positions: &[Point3<f64>],
     triangles: &[[u32; 3]],
     labels: &[u32],
+    edges: &HashMap<(u32, u32), [u32; 2]>,
     target: f64,
     tolerance: f64,
     min_fraction: f64,
@@ -154,23 +156,14 @@ pub fn surface_samples(
                 / 3.0,
         )
     };
-    let mut faces_of: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for (f, t) in triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            faces_of.entry((a.min(b), a.max(b))).or_default().push(f);
-        }
-    }
     let mut sum = vec![0.0f64; positions.len()];
     let mut count = vec![0usize; positions.len()];
     let mut ring: Vec<(u32, u32)> = Vec::new();
-    for (&(a, b), fs) in &faces_of {
-        let &[f, g] = fs.as_slice() else {
-            continue;
-        };
-        if labels.get(f) != labels.get(g) {
+    for (&(a, b), &[f, g]) in edges {
+        if g == super::NONE || labels.get(f as usize) != labels.get(g as usize) {
             continue;
         }
+        let (f, g) = (f as usize, g as usize);
         let (Some(nf), Some(ng)) = (unit(&triangles[f]), unit(&triangles[g])) else {
             continue;
         };
@@ -303,7 +296,13 @@ mod tests {
         grid(&mut p, &mut tri, &mut lab, (20, 20, 1), |u, v| {
             Point3::new(10.0 + 4.0 * u, 0.0, 4.0 * v)
         });
-        let samples = surface_samples(&p, &tri, &lab, target, t, 1.0 / 16.0);
+        let mesh = super::super::LabelledMesh {
+            positions: p.clone(),
+            triangles: tri.clone(),
+            labels: lab.clone(),
+        };
+        let topo = super::super::State::new(&mesh).topo();
+        let samples = surface_samples(&p, &tri, &lab, &topo.edges, target, t, 1.0 / 16.0);
         assert!(
             samples.iter().all(|(q, _)| q.x < 5.0),
             "a plane vertex sampled"

@@ -300,14 +300,8 @@ fn a_round_crease_gets_edges_short_enough_for_the_tolerance() {
 
 /// Smallest angle of a triangle, degrees.
 fn min_angle(out: &LabelledMesh, t: &[u32; 3]) -> f64 {
-    let p = t.map(|v| out.positions[v as usize]);
-    (0..3)
-        .map(|k| {
-            (p[(k + 1) % 3] - p[k])
-                .angle(&(p[(k + 2) % 3] - p[k]))
-                .to_degrees()
-        })
-        .fold(180.0, f64::min)
+    let [a, b, c] = t.map(|v| out.positions[v as usize]);
+    crate::mesh::shape::min_angle_deg(&a, &b, &c)
 }
 
 /// With the chord tolerance alone the caps' triangles fan out from the rim's short edges to
@@ -510,10 +504,7 @@ fn clean_removes_a_zero_length_crease_edge() {
     let degenerate = |m: &LabelledMesh| {
         m.triangles
             .iter()
-            .filter(|t| {
-                let [p, q, r] = t.map(|v| m.positions[v as usize]);
-                crate::mesh::shape::min_angle_deg(&p, &q, &r) < 0.1
-            })
+            .filter(|t| min_angle(m, t) < crate::mesh::shape::DEGENERATE_ANGLE_DEG)
             .count()
     };
     assert_eq!(degenerate(&m), 2);
