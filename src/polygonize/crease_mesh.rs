@@ -66,6 +66,10 @@ pub fn crease_mesh(
     let data = data_sides(field, mesh, QUADS);
     let mut opts = RemeshNetOptions::new(QUADS);
     opts.surface_tolerance = Some(SURFACE_TOLERANCE);
+    // Folds the data-fitted crease moves make are left to the sliver clean-up below rather
+    // than undone (crease max on hexnut.stl 1.6e-3 -> 2.3e-4 of the diagonal, lplate.stl
+    // 1.2e-3 -> 5.6e-5; docs/BENCHMARKS.md).
+    opts.undo_folds = false;
     let net = remesh_net(mesh, f, Some(field), Some(&data), diagonal, false, &opts)?;
     let labelled = LabelledMesh {
         triangles: triangulate(&net.net),

@@ -31,7 +31,9 @@ use super::crease_split::SideField;
 use super::net_quality::{folded_quads, net_quality, NetQuality};
 use super::quad_net::QuadNet;
 use super::quad_split::{split_into_quads, NodeKind};
-use super::side_projection::{project_onto_sides, region_map, SideProjectionReport, Sides};
+use super::side_projection::{
+    project_onto_sides, region_map, FoldCheck, SideProjectionReport, Sides,
+};
 use crate::error::Result;
 use crate::features::data_sides::DataSides;
 use crate::features::segment_mesh::segment_mesh_hinted;
@@ -63,6 +65,10 @@ pub struct RemeshNetOptions {
     /// default for `fit`: the target length alone;
     /// [`crate::mesh::crease_remesh::RemeshOptions::surface_sizing`]).
     pub surface_tolerance: Option<f64>,
+    /// Whether a crease node's move onto the sides fitted to the data that folds a quad is
+    /// undone (default true: a patch net keeps no new folds;
+    /// [`super::side_projection::project_onto_sides`]).
+    pub undo_folds: bool,
 }
 
 impl RemeshNetOptions {
@@ -73,6 +79,7 @@ impl RemeshNetOptions {
             iterations: 10,
             grade: 0.5,
             surface_tolerance: None,
+            undo_folds: true,
         }
     }
 }
@@ -177,6 +184,7 @@ pub fn remesh_net<I: Implicit + ?Sized>(
     let out = remesh(&labelled, &ro)?;
     let polygons: Vec<Vec<u32>> = out.triangles.iter().map(|t| t.to_vec()).collect();
     let mut split = split_into_quads(&out.positions, &polygons, &out.labels, open)?;
+    let fold_check = |net: &QuadNet| folded_quads(net, f, diagonal, 0.5 * target);
     let projection = sides.map(|field| {
         let map = region_map(&split.net, &split.quad_labels, seg.regions, field);
         project_onto_sides(
@@ -186,7 +194,7 @@ pub fn remesh_net<I: Implicit + ?Sized>(
             Sides { field, data },
             0.5 * target,
             MAX_MOVE * target,
-            &|net: &QuadNet| folded_quads(net, f, diagonal, 0.5 * target),
+            opts.undo_folds.then_some(&fold_check as &FoldCheck),
         )
     });
     let count = |k: NodeKind| split.node_kinds.iter().filter(|&&x| x == k).count();

@@ -107,6 +107,9 @@ impl Target {
     }
 }
 
+/// The folded quads of a net (one flag per quad).
+pub type FoldCheck<'a> = dyn Fn(&QuadNet) -> Vec<bool> + 'a;
+
 /// Rounds of undoing the data-fitted moves that fold quads ([`project_onto_sides`]).
 const UNFOLD_ROUNDS: usize = 4;
 
@@ -116,9 +119,13 @@ const UNFOLD_ROUNDS: usize = 4;
 /// go between the regions' surfaces fitted to the data around them where those follow their
 /// points about as well as the implicit's sides ([`LocalSides::near_checked`]): beside a crease
 /// the implicit's smooth cells round the last few tenths of a millimetre, where few points
-/// are, and its crease line runs inside the part. `folded` flags the net's folded quads: a
-/// data-fitted move that folds a quad not folded before the projection goes to the
-/// implicit's position instead (round after round, [`UNFOLD_ROUNDS`] at most).
+/// are, and its crease line runs inside the part. `folded`, when given, flags the net's
+/// folded quads: a data-fitted move that folds a quad not folded before the projection goes
+/// to the implicit's position instead (round after round, [`UNFOLD_ROUNDS`] at most). That
+/// keeps a patch net free of new folds, at a price: all four nodes of the quad go back, and
+/// the implicit's crease runs up to a tenth of a millimetre inside the part there (hexnut.stl,
+/// `reconstruct --remesh`: 36 nodes, the crease 1.6e-3 of the diagonal off), so a mesh whose
+/// slivers are cleaned afterwards does better without it ([`super::crease_mesh`]).
 pub fn project_onto_sides(
     net: &mut QuadNet,
     quad_region: &[u32],
@@ -126,7 +133,7 @@ pub fn project_onto_sides(
     sides: Sides,
     scale: f64,
     max_move: f64,
-    folded: &dyn Fn(&QuadNet) -> Vec<bool>,
+    folded: Option<&FoldCheck>,
 ) -> SideProjectionReport {
     let Sides { field, data } = sides;
     let opts = CreaseSplitOptions::default();
@@ -177,7 +184,9 @@ pub fn project_onto_sides(
         .map(|t| t.is_some_and(|t| t.data.is_some()))
         .collect();
     // The folds before the projection, needed only when some node takes the data's position.
-    let before = use_data.contains(&true).then(|| folded(net));
+    let before = folded
+        .filter(|_| use_data.contains(&true))
+        .map(|f| (f, f(net)));
     let place = |net: &mut QuadNet, use_data: &[bool]| {
         for (i, t) in targets.iter().enumerate() {
             net.nodes[i] = t.and_then(|t| t.chosen(use_data[i])).unwrap_or(start[i]);
@@ -185,7 +194,7 @@ pub fn project_onto_sides(
     };
     place(net, &use_data);
     let mut report = SideProjectionReport::default();
-    if let Some(before) = before {
+    if let Some((folded, before)) = before {
         for _ in 0..UNFOLD_ROUNDS {
             let after = folded(net);
             let mut undone = 0;
@@ -249,4 +258,124 @@ fn onto_side(
         x -= g * (f / g2);
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    /// Two half-planes meeting at a right angle along the y axis: side 0 the plane z = 0,
+    /// side 1 the plane x = `off`.
+    struct Planes {
+        off: f64,
+    }
+
+    impl SideField for Planes {
+        fn region(&self, x: &Point3<f64>) -> u32 {
+            u32::from(x.z < -0.5)
+        }
+        fn side(&self, region: u32, x: &Point3<f64>) -> (f64, Vector3<f64>) {
+            match region {
+                0 => (x.z, Vector3::z()),
+                _ => (x.x - self.off, Vector3::x()),
+            }
+        }
+    }
+
+    /// Data whose surfaces put the edge 0.3 out along x, and always pass the check.
+    struct Data;
+
+    impl LocalSides for Data {
+        fn near(&self, _: &Point3<f64>, _: &[u32]) -> Option<Box<dyn SideField + Send + Sync>> {
+            Some(Box::new(Planes { off: 0.3 }))
+        }
+        fn near_checked(
+            &self,
+            x: &Point3<f64>,
+            regions: &[u32],
+            _: &dyn SideField,
+            _: f64,
+        ) -> Option<Box<dyn SideField + Send + Sync>> {
+            self.near(x, regions)
+        }
+        fn region(&self, x: &Point3<f64>) -> Option<u32> {
+            Some(Planes { off: 0.3 }.region(x))
+        }
+    }
+
+    /// An L of unit quads: two rows on z = 0 (x from -2 to 0), two on x = 0 (z from 0 to
+    /// -2), four along y; the crease nodes are (0, j, 0). Quad labels: 0 on z = 0, 1 on x = 0.
+    fn l_net() -> (QuadNet, Vec<u32>) {
+        let id = |i: usize, j: usize| (i * 5 + j) as u32;
+        // Column i: x = i - 2 on the top (i <= 2), z = 2 - i on the side (i >= 2).
+        let nodes = (0..5)
+            .flat_map(|i| {
+                (0..5).map(move |j| {
+                    let (x, z) = if i <= 2 {
+                        (i as f64 - 2.0, 0.0)
+                    } else {
+                        (0.0, 2.0 - i as f64)
+                    };
+                    Point3::new(x, j as f64, z)
+                })
+            })
+            .collect();
+        let mut quads = Vec::new();
+        let mut labels = Vec::new();
+        for i in 0..4 {
+            for j in 0..4 {
+                quads.push([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+                labels.push(u32::from(i >= 2));
+            }
+        }
+        (QuadNet::new_open(nodes, quads).unwrap(), labels)
+    }
+
+    /// The crease nodes go between the data's surfaces (0.3 out); a fold check that flags
+    /// every quad with a node past x = 0.2 sends them back to the implicit's edge (x = 0),
+    /// and without the check they stay on the data's.
+    #[test]
+    fn data_moves_that_fold_are_undone_only_when_checked() {
+        let field = Planes { off: 0.0 };
+        let sides = Sides {
+            field: &field,
+            data: Some(&Data),
+        };
+        let folded = |net: &QuadNet| {
+            net.quads
+                .iter()
+                .map(|q| q.iter().any(|&i| net.nodes[i as usize].x > 0.2))
+                .collect::<Vec<bool>>()
+        };
+        let crease_x = |net: &QuadNet| (1..4).map(|j| net.nodes[2 * 5 + j].x).collect::<Vec<f64>>();
+        let (mut checked, labels) = l_net();
+        let r = project_onto_sides(
+            &mut checked,
+            &labels,
+            &[0, 1],
+            sides,
+            1.0,
+            1.0,
+            Some(&folded),
+        );
+        assert_eq!(
+            (r.crease_nodes, r.data_undone, r.data_fitted),
+            (3, 3, 0),
+            "{r:?}"
+        );
+        for x in crease_x(&checked) {
+            assert!(x.abs() < 1e-9, "{x}");
+        }
+        let (mut free, labels) = l_net();
+        let r = project_onto_sides(&mut free, &labels, &[0, 1], sides, 1.0, 1.0, None);
+        assert_eq!(
+            (r.crease_nodes, r.data_undone, r.data_fitted),
+            (3, 0, 3),
+            "{r:?}"
+        );
+        for x in crease_x(&free) {
+            assert!((x - 0.3).abs() < 1e-6, "{x}");
+        }
+    }
 }
