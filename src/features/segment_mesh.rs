@@ -78,6 +78,9 @@ pub fn segment_mesh(mesh: &Mesh, opt: &MeshOptions) -> Result<MeshLabels> {
     segment_mesh_hinted(mesh, opt, None)
 }
 
+/// Regions to absorb above which one round merges many of them ([`segment_mesh_hinted`]).
+const BATCH_FROM: usize = 256;
+
 /// [`segment_mesh`], with `hint` a prior label per face (module doc): a narrow region whose
 /// faces mostly carry another prior label than its neighbour's is not absorbed. Fails when
 /// `hint` does not hold one label per face.
@@ -144,27 +147,49 @@ pub fn segment_mesh_hinted(
         let narrow = |r: usize| {
             perimeter[r] > 0.0 && area[r] / (0.5 * perimeter[r]) < opt.min_width * mean_edge
         };
-        // The neighbour sharing the longest boundary.
-        let into = |r: u32| {
-            border
-                .iter()
-                .filter(|(k, _)| k.0 == r || k.1 == r)
-                .max_by(|x, y| x.1.total_cmp(y.1).then(y.0.cmp(x.0)))
-                .map(|(k, _)| if k.0 == r { k.1 } else { k.0 })
-        };
+        // The neighbour sharing the longest boundary (ties: the first pair in key order).
+        let mut best: Vec<Option<(f64, (u32, u32))>> = vec![None; count];
+        for (&k, &len) in &border {
+            for r in [k.0, k.1] {
+                let b = &mut best[r as usize];
+                if b.is_none_or(|(l, _)| len > l) {
+                    *b = Some((len, k));
+                }
+            }
+        }
+        let into = |r: u32| best[r as usize].map(|(_, k)| if k.0 == r { k.1 } else { k.0 });
         let prior = hint.map(|h| prior_majorities(h, &label, count));
         let distinct = |r: usize| match (&prior, into(r as u32)) {
             (Some(m), Some(n)) => matches!((m[r], m[n as usize]), (Some(a), Some(b)) if a != b),
             _ => false,
         };
-        let victim = (0..count)
+        let mut victims: Vec<usize> = (0..count)
             .filter(|&r| perimeter[r] > 0.0 && (tiny(r) || (narrow(r) && !distinct(r))))
-            .min_by(|&a, &b| area[a].total_cmp(&area[b]).then(a.cmp(&b)));
-        let Some(r) = victim else { break };
-        let r = r as u32;
-        let Some(into) = into(r) else { break };
+            .collect();
+        victims.sort_by(|&a, &b| area[a].total_cmp(&area[b]).then(a.cmp(&b)));
+        let Some(&first) = victims.first() else { break };
+        let Some(first_into) = into(first as u32) else {
+            break;
+        };
         let mut sets = DisjointSets::new(count);
-        sets.union(r, into);
+        sets.union(first as u32, first_into);
+        // Thousands of specks (a noisy mesh's): each round merges every victim whose
+        // neighbour is untouched in it, smallest first, instead of one per round.
+        if victims.len() > BATCH_FROM {
+            let mut touched = vec![false; count];
+            touched[first] = true;
+            touched[first_into as usize] = true;
+            for &r in &victims[1..] {
+                match into(r as u32) {
+                    Some(n) if !touched[r] && !touched[n as usize] => {
+                        sets.union(r as u32, n);
+                        touched[r] = true;
+                        touched[n as usize] = true;
+                    }
+                    _ => {}
+                }
+            }
+        }
         let (map, c) = sets.labels();
         for l in label.iter_mut() {
             *l = map[*l as usize];
@@ -375,6 +400,36 @@ mod tests {
         let same = vec![0; m.faces.len()];
         let l = segment_mesh_hinted(&m, &MeshOptions::default(), Some(&same)).unwrap();
         assert_eq!(l.regions, 2);
+    }
+
+    /// A plane of 60 x 60 unit cells with 400 spikes (a vertex every third row and column
+    /// lifted by 2): 400 specks and more, absorbed many per round, leave the plane alone.
+    #[test]
+    fn hundreds_of_specks_are_absorbed() {
+        let n = 61;
+        let id = |i: usize, j: usize| (i * n + j) as u32;
+        let positions = (0..n)
+            .flat_map(|i| {
+                (0..n).map(move |j| {
+                    let spike = i % 3 == 1 && j % 3 == 1;
+                    Point3::new(i as f64, j as f64, if spike { 2.0 } else { 0.0 })
+                })
+            })
+            .collect();
+        let mut faces = Vec::new();
+        for i in 0..n - 1 {
+            for j in 0..n - 1 {
+                faces.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                faces.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let m = Mesh {
+            positions,
+            normals: None,
+            faces,
+        };
+        let l = segment_mesh(&m, &MeshOptions::default()).unwrap();
+        assert_eq!(l.regions, 1, "{:?}", l.pairs.len());
     }
 
     #[test]
