@@ -167,27 +167,24 @@ pub fn segment_mesh_hinted(
             .filter(|&r| perimeter[r] > 0.0 && (tiny(r) || (narrow(r) && !distinct(r))))
             .collect();
         victims.sort_by(|&a, &b| area[a].total_cmp(&area[b]).then(a.cmp(&b)));
-        let Some(&first) = victims.first() else { break };
-        let Some(first_into) = into(first as u32) else {
-            break;
+        match victims.first() {
+            Some(&r) if into(r as u32).is_some() => {}
+            _ => break,
+        }
+        // The smallest victim; with thousands of specks (a noisy mesh's), every victim whose
+        // neighbour is untouched in this round, smallest first.
+        let take = if victims.len() > BATCH_FROM {
+            victims.len()
+        } else {
+            1
         };
         let mut sets = DisjointSets::new(count);
-        sets.union(first as u32, first_into);
-        // Thousands of specks (a noisy mesh's): each round merges every victim whose
-        // neighbour is untouched in it, smallest first, instead of one per round.
-        if victims.len() > BATCH_FROM {
-            let mut touched = vec![false; count];
-            touched[first] = true;
-            touched[first_into as usize] = true;
-            for &r in &victims[1..] {
-                match into(r as u32) {
-                    Some(n) if !touched[r] && !touched[n as usize] => {
-                        sets.union(r as u32, n);
-                        touched[r] = true;
-                        touched[n as usize] = true;
-                    }
-                    _ => {}
-                }
+        let mut touched = vec![false; count];
+        for &r in &victims[..take] {
+            if let Some(n) = into(r as u32).filter(|&n| !touched[r] && !touched[n as usize]) {
+                sets.union(r as u32, n);
+                touched[r] = true;
+                touched[n as usize] = true;
             }
         }
         let (map, c) = sets.labels();
